@@ -1,0 +1,233 @@
+//! Commands (pipeline stage 1): what the geometry side sends to the raster
+//! engine, like REjr's instruction FIFO — spans, triangles, area fills, Z
+//! fills and window-ID fills, each with its per-command [`State`].
+
+use crate::error::Error;
+use crate::format::Rgb;
+use crate::geom::Rect;
+use crate::numeric::{ColorFix, ColorStep, Coord, ZFix, ZStep, COORD_LIMIT, SUBPIXEL};
+
+/// A triangle vertex: sub-pixel position, 16-bit depth, 24-bit colour.
+///
+/// ```
+/// use tilerast::prelude::*;
+/// let v = Vertex::new(Coord::from_num(10.5), Coord::from_num(3), 1000, Rgb::new(255, 0, 0));
+/// assert!(v.validate().is_ok());
+/// let far = Vertex::new(Coord::from_num(9000), Coord::from_num(0), 0, Rgb::default());
+/// assert_eq!(far.validate(), Err(Error::CoordOutOfRange));
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Vertex {
+    /// Column in pixels (4 sub-pixel bits); pixel centres are at `+0.5`.
+    pub x: Coord,
+    /// Row in pixels (4 sub-pixel bits), growing downwards.
+    pub y: Coord,
+    /// Depth, 0 nearest.
+    pub z: u16,
+    /// Colour at the vertex.
+    pub color: Rgb,
+}
+
+impl Vertex {
+    /// A vertex from fixed-point coordinates.
+    pub const fn new(x: Coord, y: Coord, z: u16, color: Rgb) -> Self {
+        Vertex { x, y, z, color }
+    }
+
+    /// A vertex from float pixel coordinates, rounded to the nearest 1/16
+    /// pixel. NaN and infinities give [`Error::NotFinite`], coordinates
+    /// outside `[-COORD_LIMIT, COORD_LIMIT)` give [`Error::CoordOutOfRange`].
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// assert!(Vertex::try_from_f32(1.03, 2.0, 0, Rgb::default()).is_ok());
+    /// assert_eq!(Vertex::try_from_f32(f32::NAN, 2.0, 0, Rgb::default()), Err(Error::NotFinite));
+    /// assert_eq!(Vertex::try_from_f32(1e9, 2.0, 0, Rgb::default()), Err(Error::CoordOutOfRange));
+    /// ```
+    #[cfg(feature = "float")]
+    pub fn try_from_f32(x: f32, y: f32, z: u16, color: Rgb) -> Result<Self, Error> {
+        let c = |v: f32| -> Result<Coord, Error> {
+            if !v.is_finite() {
+                return Err(Error::NotFinite);
+            }
+            Coord::checked_from_num(v).ok_or(Error::CoordOutOfRange)
+        };
+        let v = Vertex::new(c(x)?, c(y)?, z, color);
+        v.validate()?;
+        Ok(v)
+    }
+
+    /// Checks the documented coordinate domain.
+    pub fn validate(&self) -> Result<(), Error> {
+        let lim = COORD_LIMIT as i64 * SUBPIXEL;
+        let ok = |c: Coord| (-lim..lim).contains(&(c.to_bits() as i64));
+        if ok(self.x) && ok(self.y) {
+            Ok(())
+        } else {
+            Err(Error::CoordOutOfRange)
+        }
+    }
+}
+
+/// Per-command state (the seed's window ID and plane mask).
+///
+/// ```
+/// use tilerast::command::State;
+/// let s = State { wid: 3, ..State::default() };
+/// assert_eq!(s.plane_mask, u32::MAX);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct State {
+    /// The command draws only where the window-ID plane holds this ID
+    /// (ignored by tiles without a window-ID plane).
+    pub wid: u8,
+    /// Bits of the packed pixel the command may change (in the display
+    /// format's packing, e.g. `0xF800` = red of RGB565). Default: all.
+    pub plane_mask: u32,
+}
+
+impl Default for State {
+    fn default() -> Self {
+        State {
+            wid: 0,
+            plane_mask: u32::MAX,
+        }
+    }
+}
+
+/// The raster engine's span command: start position, pixel count, start
+/// colour and depth and their per-pixel steps (seed 001, §II.1).
+///
+/// ```
+/// use tilerast::prelude::*;
+/// let s = SpanCmd {
+///     x: 0, y: 0, len: 256,
+///     color: [ColorFix::ZERO; 3],
+///     dcolor: [ColorStep::ONE, ColorStep::ZERO, ColorStep::ZERO], // 0..255 ramp
+///     z: ZFix::ZERO, dz: ZStep::ZERO,
+/// };
+/// assert!(s.validate().is_ok());
+/// assert_eq!(SpanCmd { len: 257, ..s }.validate(), Err(Error::SpanOutOfRange));
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SpanCmd {
+    /// Screen column of the first pixel.
+    pub x: i32,
+    /// Screen row.
+    pub y: i32,
+    /// Number of pixels.
+    pub len: u16,
+    /// Colour of the first pixel, 0..255 scale.
+    pub color: [ColorFix; 3],
+    /// Colour step per pixel.
+    pub dcolor: [ColorStep; 3],
+    /// Depth of the first pixel.
+    pub z: ZFix,
+    /// Depth step per pixel.
+    pub dz: ZStep,
+}
+
+impl SpanCmd {
+    /// Checks position and that every channel stays in range up to the last
+    /// pixel (`[0, 256)` for colour, `[0, 65536)` for Z).
+    pub fn validate(&self) -> Result<(), Error> {
+        let lim = COORD_LIMIT as i64;
+        let x_ok = (-lim..lim).contains(&(self.x as i64)) && self.x as i64 + self.len as i64 <= lim;
+        if !x_ok || !(-lim..lim).contains(&(self.y as i64)) {
+            return Err(Error::CoordOutOfRange);
+        }
+        let last = self.len.saturating_sub(1) as i64;
+        let in_range = |start: i64, step: i64, max: i64| {
+            let end = start + step * last;
+            (0..max).contains(&start) && (0..max).contains(&end)
+        };
+        let colors_ok = (0..3).all(|i| {
+            in_range(
+                self.color[i].to_bits() as i64,
+                self.dcolor[i].to_bits() as i64,
+                256 << 16,
+            )
+        });
+        if colors_ok
+            && in_range(
+                self.z.to_bits() as i64,
+                self.dz.to_bits() as i64,
+                65536 << 16,
+            )
+        {
+            Ok(())
+        } else {
+            Err(Error::SpanOutOfRange)
+        }
+    }
+}
+
+/// One display-list command.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Command {
+    /// A Gouraud-shaded, Z-tested triangle (either winding).
+    Triangle {
+        /// The vertices.
+        v: [Vertex; 3],
+        /// Window ID and plane mask.
+        state: State,
+    },
+    /// A span with per-pixel colour and depth steps.
+    Span {
+        /// The span.
+        span: SpanCmd,
+        /// Window ID and plane mask.
+        state: State,
+    },
+    /// Area fill with a flat colour: window-ID test and plane mask, no Z, no dither.
+    Fill {
+        /// Pixels to fill (clipped to the screen).
+        rect: Rect,
+        /// The colour.
+        color: Rgb,
+        /// Window ID and plane mask.
+        state: State,
+    },
+    /// Z fill: sets depth where the window-ID test passes.
+    ZFill {
+        /// Pixels to fill.
+        rect: Rect,
+        /// The depth.
+        z: u16,
+        /// Window ID (the plane mask is not used).
+        state: State,
+    },
+    /// Window-ID fill: claims pixels for a window, unconditionally.
+    WidFill {
+        /// Pixels to claim.
+        rect: Rect,
+        /// The window ID.
+        wid: u8,
+    },
+}
+
+impl Command {
+    /// Checks the command against the numeric contract.
+    pub fn validate(&self) -> Result<(), Error> {
+        match self {
+            Command::Triangle { v, .. } => v.iter().try_for_each(Vertex::validate),
+            Command::Span { span, .. } => span.validate(),
+            _ => Ok(()),
+        }
+    }
+
+    /// The screen pixels the command can touch, `None` when it touches none.
+    pub fn bounds(&self) -> Option<Rect> {
+        match self {
+            Command::Triangle { v, .. } => crate::setup::pixel_bounds(v),
+            Command::Span { span, .. } if span.len > 0 => {
+                Some(Rect::new(span.x, span.y, span.len as u32, 1))
+            }
+            Command::Span { .. } => None,
+            Command::Fill { rect, .. }
+            | Command::ZFill { rect, .. }
+            | Command::WidFill { rect, .. } => (rect.w > 0 && rect.h > 0).then_some(*rect),
+        }
+    }
+}

@@ -1,0 +1,57 @@
+//! Errors are values: nothing in the core panics on user input.
+
+/// What can go wrong when building or drawing commands.
+///
+/// ```
+/// use tilerast::prelude::*;
+/// let mut list: DisplayList<1> = DisplayList::new();
+/// let fill = Command::Fill { rect: Rect::new(0, 0, 4, 4), color: Rgb::new(1, 2, 3), state: State::default() };
+/// assert!(list.push(fill).is_ok());
+/// assert_eq!(list.push(fill), Err(Error::ListFull));
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Error {
+    /// The display list is at capacity.
+    ListFull,
+    /// A coordinate lies outside `[-COORD_LIMIT, COORD_LIMIT)`.
+    CoordOutOfRange,
+    /// A float input was NaN or infinite.
+    NotFinite,
+    /// A span's interpolated values leave their range before its last pixel.
+    SpanOutOfRange,
+    /// A screen or tile size is zero or larger than `MAX_SIDE`.
+    BadSize,
+    /// The tile rectangle holds more pixels than the tile's capacity.
+    TileTooLarge,
+}
+
+impl core::fmt::Display for Error {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            Error::ListFull => "display list is full",
+            Error::CoordOutOfRange => "coordinate outside the documented range",
+            Error::NotFinite => "NaN or infinite input",
+            Error::SpanOutOfRange => "span values leave their range",
+            Error::BadSize => "screen or tile size is zero or too large",
+            Error::TileTooLarge => "tile rectangle exceeds tile capacity",
+        })
+    }
+}
+
+/// Error from rendering a frame into a display: the raster core's or the
+/// display's own.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum FlushError<E> {
+    /// The raster core rejected a command or the configuration.
+    Raster(Error),
+    /// The `DrawTarget` failed.
+    Target(E),
+}
+
+impl<E> From<Error> for FlushError<E> {
+    fn from(e: Error) -> Self {
+        FlushError::Raster(e)
+    }
+}

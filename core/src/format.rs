@@ -1,0 +1,438 @@
+//! Display formats (pipeline stage *pack*): how the interpolated channels of a
+//! fragment are quantized and packed into the tile's colour plane, and how a
+//! packed pixel leaves the tile as an `embedded-graphics` colour.
+//!
+//! Colour is interpolated directly in the **output channel scale** (seed 001,
+//! §II.3: the top bits of a 10-bit channel are the displayed value, the low
+//! bits are the dither fraction). A vertex colour `c` (0..255) becomes
+//! `c * MAX / 255` with 16 fraction bits at setup, so the per-pixel path is
+//! only adds, one compare per channel and a pack. Grey formats interpolate a
+//! single luma channel, `(77 R + 150 G + 29 B) / 256` (the same weights as
+//! `embedded-graphics`), computed per vertex: one lane instead of three.
+
+use crate::numeric::{div_round, COLOR_FRAC};
+use embedded_graphics_core::pixelcolor::{
+    raw::RawU16, BinaryColor, Gray8, PixelColor, Rgb565, Rgb888, RgbColor,
+};
+
+/// A 24-bit input colour, 0..255 per channel.
+///
+/// ```
+/// use tilerast::format::Rgb;
+/// let c = Rgb::new(255, 128, 0);
+/// assert_eq!((c.r, c.g, c.b), (255, 128, 0));
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Rgb {
+    /// Red.
+    pub r: u8,
+    /// Green.
+    pub g: u8,
+    /// Blue.
+    pub b: u8,
+}
+
+impl Rgb {
+    /// A colour from its channels.
+    pub const fn new(r: u8, g: u8, b: u8) -> Self {
+        Rgb { r, g, b }
+    }
+}
+
+impl From<Rgb888> for Rgb {
+    fn from(c: Rgb888) -> Self {
+        Rgb::new(c.r(), c.g(), c.b())
+    }
+}
+
+/// The interpolated channels of one fragment: `[i32; 3]` for RGB formats,
+/// `[i32; 1]` for grey and binary. Each lane is a fixed-point value in the
+/// output channel scale with [`COLOR_FRAC`] fraction bits.
+pub trait Lanes: Copy + core::fmt::Debug {
+    /// Number of lanes.
+    const LEN: usize;
+    /// Builds lanes from a function of the lane index.
+    fn from_fn(f: impl FnMut(usize) -> i32) -> Self;
+    /// Lane `i`.
+    fn lane(&self, i: usize) -> i32;
+    /// Lane-wise map.
+    #[inline(always)]
+    fn map(self, mut f: impl FnMut(i32) -> i32) -> Self {
+        Self::from_fn(|i| f(self.lane(i)))
+    }
+    /// Lane-wise combination.
+    #[inline(always)]
+    fn zip(self, o: Self, mut f: impl FnMut(i32, i32) -> i32) -> Self {
+        Self::from_fn(|i| f(self.lane(i), o.lane(i)))
+    }
+}
+
+impl<const C: usize> Lanes for [i32; C] {
+    const LEN: usize = C;
+    #[inline(always)]
+    fn from_fn(f: impl FnMut(usize) -> i32) -> Self {
+        core::array::from_fn(f)
+    }
+    #[inline(always)]
+    fn lane(&self, i: usize) -> i32 {
+        self[i]
+    }
+}
+
+/// Storage of one plane for `8 N` pixels; values travel as `u32`.
+pub trait ColorPlane {
+    /// A plane of zeros.
+    fn new() -> Self;
+    /// The value at pixel index `i` (`i < 8 N`).
+    fn get(&self, i: usize) -> u32;
+    /// Stores `v` (already within the plane's bit width) at pixel index `i`.
+    fn set(&mut self, i: usize, v: u32);
+}
+
+/// One element of a [`Plane`].
+pub trait Cell: Copy + Default {
+    /// Widens to `u32`.
+    fn to_u32(self) -> u32;
+    /// Narrows from `u32` (the value fits by construction).
+    fn from_u32(v: u32) -> Self;
+}
+
+impl Cell for u8 {
+    #[inline(always)]
+    fn to_u32(self) -> u32 {
+        self as u32
+    }
+    #[inline(always)]
+    fn from_u32(v: u32) -> Self {
+        v as u8
+    }
+}
+
+impl Cell for u16 {
+    #[inline(always)]
+    fn to_u32(self) -> u32 {
+        self as u32
+    }
+    #[inline(always)]
+    fn from_u32(v: u32) -> Self {
+        v as u16
+    }
+}
+
+/// Three bytes, `0xRRGGBB` order: RGB888 without padding.
+impl Cell for [u8; 3] {
+    #[inline(always)]
+    fn to_u32(self) -> u32 {
+        (self[0] as u32) << 16 | (self[1] as u32) << 8 | self[2] as u32
+    }
+    #[inline(always)]
+    fn from_u32(v: u32) -> Self {
+        [(v >> 16) as u8, (v >> 8) as u8, v as u8]
+    }
+}
+
+/// A plane of `8 N` cells of type `T`, stored as `N` groups of 8 so that the
+/// 1-bit format can pack a group into one byte with the same `N`.
+///
+/// ```
+/// use tilerast::format::{ColorPlane, Plane};
+/// let mut p: Plane<u16, 2> = Plane::new();
+/// p.set(15, 0xBEEF);
+/// assert_eq!(p.get(15), 0xBEEF);
+/// assert_eq!(core::mem::size_of::<Plane<u16, 2>>(), 32);
+/// ```
+#[derive(Clone)]
+pub struct Plane<T, const N: usize>(pub [[T; 8]; N]);
+
+impl<T: Cell, const N: usize> ColorPlane for Plane<T, N> {
+    fn new() -> Self {
+        Plane([[T::default(); 8]; N])
+    }
+    #[inline(always)]
+    fn get(&self, i: usize) -> u32 {
+        self.0.as_flattened()[i].to_u32()
+    }
+    #[inline(always)]
+    fn set(&mut self, i: usize, v: u32) {
+        self.0.as_flattened_mut()[i] = T::from_u32(v);
+    }
+}
+
+/// A 1-bit plane: 8 pixels per byte, bit `i % 8` of byte `i / 8`.
+///
+/// ```
+/// use tilerast::format::{BitPlane, ColorPlane};
+/// let mut p: BitPlane<4> = BitPlane::new(); // 32 pixels in 4 bytes
+/// p.set(9, 1);
+/// assert_eq!((p.get(8), p.get(9)), (0, 1));
+/// assert_eq!(core::mem::size_of::<BitPlane<4>>(), 4);
+/// ```
+#[derive(Clone)]
+pub struct BitPlane<const N: usize>(pub [u8; N]);
+
+impl<const N: usize> ColorPlane for BitPlane<N> {
+    fn new() -> Self {
+        BitPlane([0; N])
+    }
+    #[inline(always)]
+    fn get(&self, i: usize) -> u32 {
+        (self.0[i >> 3] >> (i & 7)) as u32 & 1
+    }
+    #[inline(always)]
+    fn set(&mut self, i: usize, v: u32) {
+        let b = &mut self.0[i >> 3];
+        *b = (*b & !(1 << (i & 7))) | (((v & 1) as u8) << (i & 7));
+    }
+}
+
+/// A display format: channel count and depth, packing, plane storage and the
+/// `embedded-graphics` colour it flushes as.
+pub trait PixelFormat: 'static {
+    /// The colour type a packed pixel converts to when flushed.
+    type Color: PixelColor;
+    /// Colour-plane storage for `8 N` pixels.
+    type Plane<const N: usize>: ColorPlane;
+    /// Interpolated channels.
+    type Lanes: Lanes;
+    /// Largest value of each channel (e.g. `[31, 63, 31]` for RGB565).
+    const MAX: Self::Lanes;
+    /// Plane mask that writes every bit.
+    const MASK_ALL: u32;
+    /// A short name for reports.
+    const NAME: &'static str;
+
+    /// Maps a colour on the 0..255 scale with 16 fraction bits (`[r, g, b]`,
+    /// signed so that it also serves per-pixel steps) to lanes in the output
+    /// scale with [`COLOR_FRAC`] fraction bits, rounded to nearest.
+    fn lanes_from_rgb(rgb: [i64; 3]) -> Self::Lanes;
+    /// Packs quantized channel values (each within `0..=MAX`).
+    fn pack(q: Self::Lanes) -> u32;
+    /// Converts a packed pixel to its `embedded-graphics` colour.
+    fn to_color(raw: u32) -> Self::Color;
+
+    /// A flat colour, rounded to nearest, packed: what fills write (the seed's
+    /// fill bypasses the interpolating channels and the dither).
+    ///
+    /// ```
+    /// use tilerast::format::{PixelFormat, Rgb, Rgb565Format};
+    /// assert_eq!(Rgb565Format::pack_rgb(Rgb::new(255, 255, 255)), 0xFFFF);
+    /// assert_eq!(Rgb565Format::pack_rgb(Rgb::new(255, 0, 0)), 0xF800);
+    /// ```
+    fn pack_rgb(c: Rgb) -> u32 {
+        let l = Self::lanes_from_rgb([
+            (c.r as i64) << COLOR_FRAC,
+            (c.g as i64) << COLOR_FRAC,
+            (c.b as i64) << COLOR_FRAC,
+        ]);
+        let half = 1 << (COLOR_FRAC - 1);
+        Self::pack(l.zip(Self::MAX, |v, m| ((v + half) >> COLOR_FRAC).clamp(0, m)))
+    }
+}
+
+/// Scales one 0..255 channel (8.16) to `0..=max` (x.16), rounded.
+#[inline]
+fn scale(v: i64, max: i32) -> i32 {
+    div_round(v * max as i64, 255) as i32
+}
+
+/// Scales RGB (8.16) to a luma lane `0..=max` (x.16), rounded.
+#[inline]
+fn scale_luma(rgb: [i64; 3], max: i32) -> i32 {
+    let y = 77 * rgb[0] + 150 * rgb[1] + 29 * rgb[2];
+    div_round(y * max as i64, 255 * 256) as i32
+}
+
+macro_rules! rgb_format {
+    ($name:ident, $color:ty, $cell:ty, [$r:expr, $g:expr, $b:expr], $mask:expr, $label:expr, $doc:expr) => {
+        #[doc = $doc]
+        #[derive(Debug, Clone, Copy, Default)]
+        pub struct $name;
+        impl PixelFormat for $name {
+            type Color = $color;
+            type Plane<const N: usize> = Plane<$cell, N>;
+            type Lanes = [i32; 3];
+            const MAX: [i32; 3] = [$r, $g, $b];
+            const MASK_ALL: u32 = $mask;
+            const NAME: &'static str = $label;
+            #[inline]
+            fn lanes_from_rgb(rgb: [i64; 3]) -> [i32; 3] {
+                [scale(rgb[0], $r), scale(rgb[1], $g), scale(rgb[2], $b)]
+            }
+            #[inline(always)]
+            fn pack(q: [i32; 3]) -> u32 {
+                const GB: u32 = ($g as u32 + 1).trailing_zeros();
+                const BB: u32 = ($b as u32 + 1).trailing_zeros();
+                (q[0] as u32) << (GB + BB) | (q[1] as u32) << BB | q[2] as u32
+            }
+            #[inline]
+            fn to_color(raw: u32) -> $color {
+                const GB: u32 = ($g as u32 + 1).trailing_zeros();
+                const BB: u32 = ($b as u32 + 1).trailing_zeros();
+                <$color>::new(
+                    (raw >> (GB + BB)) as u8 & $r,
+                    (raw >> BB) as u8 & $g,
+                    raw as u8 & $b,
+                )
+            }
+        }
+    };
+}
+
+rgb_format!(
+    Rgb888Format,
+    Rgb888,
+    [u8; 3],
+    [255, 255, 255],
+    0xFF_FFFF,
+    "rgb888",
+    "24-bit true colour, 3 bytes per pixel."
+);
+rgb_format!(
+    Rgb565Format,
+    Rgb565,
+    u16,
+    [31, 63, 31],
+    0xFFFF,
+    "rgb565",
+    "16-bit colour (ST7789, ILI9341), 2 bytes per pixel."
+);
+rgb_format!(
+    Rgb444Format,
+    Rgb444,
+    u16,
+    [15, 15, 15],
+    0x0FFF,
+    "rgb444",
+    "12-bit colour, the seed's double-buffered half-plane mode (`0x0RGB` in 2 bytes)."
+);
+
+/// 8-bit grey, 1 byte per pixel.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Gray8Format;
+impl PixelFormat for Gray8Format {
+    type Color = Gray8;
+    type Plane<const N: usize> = Plane<u8, N>;
+    type Lanes = [i32; 1];
+    const MAX: [i32; 1] = [255];
+    const MASK_ALL: u32 = 0xFF;
+    const NAME: &'static str = "gray8";
+    #[inline]
+    fn lanes_from_rgb(rgb: [i64; 3]) -> [i32; 1] {
+        [scale_luma(rgb, 255)]
+    }
+    #[inline(always)]
+    fn pack(q: [i32; 1]) -> u32 {
+        q[0] as u32
+    }
+    fn to_color(raw: u32) -> Gray8 {
+        Gray8::new(raw as u8)
+    }
+}
+
+/// 1 bit per pixel (SSD1306 class), 8 pixels per byte. Shading shows only
+/// through dithering.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct BinaryFormat;
+impl PixelFormat for BinaryFormat {
+    type Color = BinaryColor;
+    type Plane<const N: usize> = BitPlane<N>;
+    type Lanes = [i32; 1];
+    const MAX: [i32; 1] = [1];
+    const MASK_ALL: u32 = 1;
+    const NAME: &'static str = "binary";
+    #[inline]
+    fn lanes_from_rgb(rgb: [i64; 3]) -> [i32; 1] {
+        [scale_luma(rgb, 1)]
+    }
+    #[inline(always)]
+    fn pack(q: [i32; 1]) -> u32 {
+        q[0] as u32
+    }
+    fn to_color(raw: u32) -> BinaryColor {
+        BinaryColor::from(raw & 1 != 0)
+    }
+}
+
+/// 12-bit RGB colour (4 bits per channel), which `embedded-graphics` lacks.
+///
+/// ```
+/// use tilerast::format::Rgb444;
+/// use embedded_graphics_core::pixelcolor::{Rgb888, RgbColor};
+/// assert_eq!(Rgb888::from(Rgb444::new(15, 8, 0)), Rgb888::new(255, 136, 0));
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Rgb444(u16);
+
+impl Rgb444 {
+    /// A colour from 4-bit channels (higher bits are ignored).
+    pub const fn new(r: u8, g: u8, b: u8) -> Self {
+        Rgb444(((r as u16 & 15) << 8) | ((g as u16 & 15) << 4) | (b as u16 & 15))
+    }
+}
+
+impl PixelColor for Rgb444 {
+    type Raw = RawU16;
+}
+
+impl RgbColor for Rgb444 {
+    fn r(&self) -> u8 {
+        (self.0 >> 8) as u8 & 15
+    }
+    fn g(&self) -> u8 {
+        (self.0 >> 4) as u8 & 15
+    }
+    fn b(&self) -> u8 {
+        self.0 as u8 & 15
+    }
+    const MAX_R: u8 = 15;
+    const MAX_G: u8 = 15;
+    const MAX_B: u8 = 15;
+    const BLACK: Self = Rgb444::new(0, 0, 0);
+    const RED: Self = Rgb444::new(15, 0, 0);
+    const GREEN: Self = Rgb444::new(0, 15, 0);
+    const BLUE: Self = Rgb444::new(0, 0, 15);
+    const YELLOW: Self = Rgb444::new(15, 15, 0);
+    const MAGENTA: Self = Rgb444::new(15, 0, 15);
+    const CYAN: Self = Rgb444::new(0, 15, 15);
+    const WHITE: Self = Rgb444::new(15, 15, 15);
+}
+
+/// Expands a 4-bit channel exactly (`v * 17`).
+const fn x17(v: u8) -> u8 {
+    v * 17
+}
+
+impl From<Rgb444> for Rgb888 {
+    fn from(c: Rgb444) -> Self {
+        Rgb888::new(x17(c.r()), x17(c.g()), x17(c.b()))
+    }
+}
+
+impl From<Rgb444> for Rgb565 {
+    fn from(c: Rgb444) -> Self {
+        Rgb565::from(Rgb888::from(c))
+    }
+}
+
+impl From<Rgb444> for Gray8 {
+    fn from(c: Rgb444) -> Self {
+        Gray8::from(Rgb888::from(c))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    #[test]
+    fn extremes_map_to_channel_limits() {
+        assert_eq!(Rgb444Format::pack_rgb(Rgb::new(255, 255, 255)), 0xFFF);
+        assert_eq!(Rgb888Format::pack_rgb(Rgb::new(1, 2, 3)), 0x010203);
+        assert_eq!(Gray8Format::pack_rgb(Rgb::new(255, 255, 255)), 255);
+        assert_eq!(BinaryFormat::pack_rgb(Rgb::new(255, 255, 255)), 1);
+        assert_eq!(BinaryFormat::pack_rgb(Rgb::new(0, 0, 0)), 0);
+        let c = Rgb565Format::to_color(0xF800);
+        assert_eq!(Rgb888::from(c), Rgb888::new(255, 0, 0));
+    }
+}

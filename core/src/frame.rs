@@ -1,0 +1,161 @@
+//! Frames, binning and flush (pipeline stages 3 and 9): a frame is cut into
+//! tiles; each tile is cleared, replays the display-list commands whose
+//! bounds touch it, and is flushed to the display. The result is
+//! byte-identical to rendering the frame as one big tile.
+
+use crate::command::Command;
+use crate::dither::Dither;
+use crate::error::{Error, FlushError};
+use crate::format::{PixelFormat, Rgb};
+use crate::fragment::{DepthMode, WidMode};
+use crate::geom::Rect;
+use crate::numeric::MAX_SIDE;
+use crate::tile::Tile;
+use embedded_graphics_core::draw_target::DrawTarget;
+
+/// Values every tile starts with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Clear {
+    /// Background colour.
+    pub color: Rgb,
+    /// Depth (65535: farthest).
+    pub depth: u16,
+    /// Window ID.
+    pub wid: u8,
+}
+
+impl Default for Clear {
+    fn default() -> Self {
+        Clear {
+            color: Rgb::default(),
+            depth: u16::MAX,
+            wid: 0,
+        }
+    }
+}
+
+/// What rendering a frame did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct FrameStats {
+    /// Tiles rendered.
+    pub tiles: u32,
+    /// Commands replayed, summed over tiles (binning skips the others).
+    pub replayed: u32,
+}
+
+/// A screen cut into tiles.
+///
+/// ```
+/// use tilerast::prelude::*;
+/// let f = Frame::new(100, 50, 64, 32)?;
+/// let tiles: Vec<Rect> = f.tiles().collect();
+/// assert_eq!(tiles, [Rect::new(0, 0, 64, 32), Rect::new(64, 0, 36, 32),
+///                    Rect::new(0, 32, 64, 18), Rect::new(64, 32, 36, 18)]);
+/// # Ok::<(), Error>(())
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Frame {
+    width: u16,
+    height: u16,
+    tile_w: u16,
+    tile_h: u16,
+    /// Values each tile is cleared to.
+    pub clear: Clear,
+}
+
+impl Frame {
+    /// A `width x height` screen in tiles of `tile_w x tile_h` (edge tiles
+    /// are cropped). Sides must be in `1..=MAX_SIDE`.
+    pub fn new(width: u16, height: u16, tile_w: u16, tile_h: u16) -> Result<Self, Error> {
+        let ok = |s: u16| (1..=MAX_SIDE).contains(&s);
+        if [width, height, tile_w, tile_h].into_iter().all(ok) {
+            Ok(Frame {
+                width,
+                height,
+                tile_w,
+                tile_h,
+                clear: Clear::default(),
+            })
+        } else {
+            Err(Error::BadSize)
+        }
+    }
+
+    /// The screen rectangle.
+    pub fn screen(&self) -> Rect {
+        Rect::new(0, 0, self.width as u32, self.height as u32)
+    }
+
+    /// Tile size.
+    pub fn tile_size(&self) -> (u16, u16) {
+        (self.tile_w, self.tile_h)
+    }
+
+    /// Tile rectangles in row-major order.
+    pub fn tiles(&self) -> impl Iterator<Item = Rect> + '_ {
+        let (tw, th) = (self.tile_w as u32, self.tile_h as u32);
+        (0..self.height as u32)
+            .step_by(th as usize)
+            .flat_map(move |y| {
+                (0..self.width as u32).step_by(tw as usize).map(move |x| {
+                    Rect::new(
+                        x as i32,
+                        y as i32,
+                        tw.min(self.width as u32 - x),
+                        th.min(self.height as u32 - y),
+                    )
+                })
+            })
+    }
+
+    /// Renders every tile and hands each finished tile to `done` (a flush,
+    /// a hash, a copy into a PNG...). Commands are validated once.
+    pub fn render_with<const N: usize, F, Z, W, D, E>(
+        &self,
+        tile: &mut Tile<N, F, Z, W, D>,
+        cmds: &[Command],
+        mut done: impl FnMut(&Tile<N, F, Z, W, D>) -> Result<(), E>,
+    ) -> Result<FrameStats, FlushError<E>>
+    where
+        F: PixelFormat,
+        Z: DepthMode,
+        W: WidMode,
+        D: Dither,
+    {
+        cmds.iter().try_for_each(Command::validate)?;
+        let mut stats = FrameStats::default();
+        for area in self.tiles() {
+            tile.begin(area, &self.clear)?;
+            for cmd in cmds {
+                if cmd.bounds().and_then(|b| b.intersect(&area)).is_some() {
+                    tile.draw_valid(cmd);
+                    stats.replayed += 1;
+                }
+            }
+            done(tile).map_err(FlushError::Target)?;
+            stats.tiles += 1;
+        }
+        Ok(stats)
+    }
+
+    /// Renders every tile and flushes it to `target`.
+    pub fn render<const N: usize, F, Z, W, D, T>(
+        &self,
+        tile: &mut Tile<N, F, Z, W, D>,
+        cmds: &[Command],
+        target: &mut T,
+    ) -> Result<FrameStats, FlushError<T::Error>>
+    where
+        F: PixelFormat,
+        Z: DepthMode,
+        W: WidMode,
+        D: Dither,
+        T: DrawTarget,
+        T::Color: From<F::Color>,
+    {
+        self.render_with(tile, cmds, |t| t.flush(target))
+    }
+}

@@ -1,0 +1,102 @@
+//! # tilerast
+//!
+//! A `#![no_std]`, fixed-point tile rasterizer for microcontrollers that drive
+//! small displays (SSD1306, ST7789, ILI9341 class). It implements the raster
+//! engine of the seed paper *"고성능 그래픽스 전용 프로세서 개발"* (REjr/RE):
+//! span interpolation of R, G, B and Z with DDAs, 16-bit Z, 8-bit window-ID
+//! clipping, plane masks, and ordered dithering computed from the pixel address
+//! bits — rendered tile by tile so that a 240x240 frame needs a few KB of RAM.
+//!
+//! ## The pipeline, in reading order
+//!
+//! | stage | module | what it does |
+//! | --- | --- | --- |
+//! | commands | [`command`], [`list`] | the display list: spans, triangles, fills |
+//! | setup | [`setup`] | vertices to exact integer edge functions and attribute planes |
+//! | bin | [`frame`] | each tile replays only the commands whose bounds touch it |
+//! | traverse | [`traverse`] | exact per-row coverage with the top-left fill rule |
+//! | span | [`span`] | the one span DDA every command type uses |
+//! | fragment tests | [`fragment`] | window ID, then Z (less-than, read-modify-write) |
+//! | dither / pack | [`dither`], [`format`] | address-bit ordered dither, display formats |
+//! | tile planes | [`tile`] | colour, depth and window-ID planes chosen by type |
+//! | flush | [`tile::Tile::flush`] | the tile to any `embedded-graphics` `DrawTarget` |
+//!
+//! ## Model only what the scene requires
+//!
+//! A [`Tile`](tile::Tile)'s planes are type parameters. An absent depth or
+//! window-ID plane is `()`: zero bytes, and its test compiles to nothing.
+//!
+//! ```
+//! use tilerast::prelude::*;
+//!
+//! // 64x64 pixels (512 groups of 8), RGB565, 16-bit Z, no window IDs, 4x4 dither.
+//! type MyTile = Tile<512, Rgb565Format, Depth16, NoWid, Bayer4>;
+//! assert_eq!(MyTile::bits_per_pixel(), 16 + 16);
+//! // The same tile without depth costs only its colour plane.
+//! assert_eq!(Tile::<512, Rgb565Format>::bits_per_pixel(), 16);
+//! ```
+//!
+//! ## A whole frame
+//!
+//! ```
+//! use tilerast::prelude::*;
+//! use embedded_graphics_core::pixelcolor::Rgb565;
+//! # use embedded_graphics_core::{prelude::*, primitives::Rectangle};
+//! # struct Screen;
+//! # impl OriginDimensions for Screen { fn size(&self) -> Size { Size::new(96, 64) } }
+//! # impl DrawTarget for Screen {
+//! #     type Color = Rgb565; type Error = core::convert::Infallible;
+//! #     fn draw_iter<I: IntoIterator<Item = Pixel<Rgb565>>>(&mut self, _: I) -> Result<(), Self::Error> { Ok(()) }
+//! # }
+//! # let mut display = Screen;
+//! let mut list: DisplayList<8> = DisplayList::new();
+//! let v = |x: i32, y: i32, c: [u8; 3]| Vertex::new(Coord::from_num(x), Coord::from_num(y), 0, Rgb::new(c[0], c[1], c[2]));
+//! list.push(Command::Triangle {
+//!     v: [v(4, 4, [255, 0, 0]), v(90, 10, [0, 255, 0]), v(40, 60, [0, 0, 255])],
+//!     state: State::default(),
+//! })?;
+//! let frame = Frame::new(96, 64, 32, 32)?;
+//! let mut tile: Tile<128, Rgb565Format, NoDepth, NoWid, Bayer4> = Tile::new();
+//! frame.render(&mut tile, &list, &mut display).map_err(|_| Error::TileTooLarge)?;
+//! # Ok::<(), tilerast::Error>(())
+//! ```
+#![no_std]
+#![deny(missing_docs)]
+#![forbid(unsafe_code)]
+
+pub mod command;
+pub mod dither;
+pub mod error;
+pub mod format;
+pub mod fragment;
+pub mod frame;
+pub mod geom;
+pub mod list;
+pub mod numeric;
+pub mod setup;
+pub mod span;
+pub mod tile;
+pub mod traverse;
+
+/// The `embedded-graphics-core` crate, whose `DrawTarget` tiles flush to.
+pub use embedded_graphics_core;
+pub use error::Error;
+/// The `fixed` crate, whose types the API uses ([`numeric`]).
+pub use fixed;
+
+/// Everything a firmware author needs, in one import.
+pub mod prelude {
+    pub use crate::command::{Command, SpanCmd, State, Vertex};
+    pub use crate::dither::{Bayer, Bayer2, Bayer4, Bayer8, Dither, NoDither};
+    pub use crate::error::{Error, FlushError};
+    pub use crate::format::{
+        BinaryFormat, Gray8Format, PixelFormat, Rgb, Rgb444, Rgb444Format, Rgb565Format,
+        Rgb888Format,
+    };
+    pub use crate::fragment::{Depth16, DepthMode, NoDepth, NoWid, Wid8, WidMode};
+    pub use crate::frame::{Clear, Frame, FrameStats};
+    pub use crate::geom::Rect;
+    pub use crate::list::DisplayList;
+    pub use crate::numeric::{ColorFix, ColorStep, Coord, ZFix, ZStep};
+    pub use crate::tile::Tile;
+}

@@ -1,0 +1,164 @@
+//! Triangle setup (pipeline stage 2): vertices to exact integer edge
+//! functions and attribute planes (the RE's triangle input, seed 001 §IV.1).
+//!
+//! **Edge functions.** For the edge from `a` to `b` (sub-pixel units),
+//! `E(p) = (b.x - a.x)(p.y - a.y) - (b.y - a.y)(p.x - a.x)`, evaluated at
+//! pixel centres `p = (16 px + 8, 16 py + 8)`. Per pixel this is
+//! `E = A px + B(py)` with `A = -16 dy`, `B(py + 1) = B(py) + 16 dx`: exact
+//! `i64` integers (inputs below 2^18, products below 2^37).
+//! After orienting the triangle so that its doubled area `area2 > 0`, a pixel
+//! is inside when every `E >= 0`; on an edge (`E == 0`) it belongs to the
+//! triangle only if the edge is a *top* edge (`dy == 0, dx > 0`) or a *left*
+//! edge (`dy < 0`) — the top-left rule, applied as a bias of 1.
+//!
+//! **Attribute planes.** With `E_i` the edge opposite vertex `i`,
+//! `E_0 + E_1 + E_2 = area2` everywhere, and the barycentric weights are
+//! `w_i = E_i / area2`. An attribute is `A = a0 + (a1 - a0) w1 + (a2 - a0) w2`.
+//! Setup keeps `floor(2^62 / area2)` so that each span start evaluates the
+//! weights with two multiplies and no division (inside the triangle
+//! `0 <= E_i <= area2`, so `E_i * inv <= 2^62` cannot overflow), and the
+//! per-pixel steps `dA/dx = ((a1 - a0) A_1 + (a2 - a0) A_2) / area2`, rounded.
+
+use crate::command::Vertex;
+use crate::format::{Lanes, PixelFormat};
+use crate::geom::Rect;
+use crate::numeric::{div_floor, div_round, COLOR_FRAC, SUBPIXEL, W_FRAC, Z_FRAC};
+
+/// One edge as a function of pixel indices: `E(px, py) = a px + b0 + step py`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Edge {
+    /// Change per pixel in x: `-16 dy`.
+    pub a: i64,
+    /// Value at pixel (0, 0).
+    pub b0: i64,
+    /// Change per row: `16 dx`.
+    pub step: i64,
+    /// 0 for top-left edges, 1 otherwise: inside means `E - bias >= 0`.
+    pub bias: i64,
+}
+
+impl Edge {
+    fn new(p: (i64, i64), q: (i64, i64)) -> Edge {
+        let (dx, dy) = (q.0 - p.0, q.1 - p.1);
+        let half = SUBPIXEL / 2;
+        let top_left = dy < 0 || (dy == 0 && dx > 0);
+        Edge {
+            a: -SUBPIXEL * dy,
+            b0: dx * (half - p.1) + dy * (p.0 - half),
+            step: SUBPIXEL * dx,
+            bias: (!top_left) as i64,
+        }
+    }
+
+    /// The unbiased value at the start of row `py`.
+    #[inline]
+    pub fn row(&self, py: i64) -> i64 {
+        self.b0 + self.step * py
+    }
+}
+
+/// A triangle ready for traversal: edges, pixel bounds and attribute planes.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct TriangleSetup<L: Lanes> {
+    /// `e[i]` is the edge opposite vertex `i`.
+    pub e: [Edge; 3],
+    /// Pixels whose centres can be inside.
+    pub bounds: Rect,
+    inv: i64,
+    c0: L,
+    dc: [L; 2],
+    z0: i32,
+    dz: [i32; 2],
+    /// Colour step per pixel in x (output scale, 16 fraction bits).
+    pub gc: L,
+    /// Z step per pixel in x (16.14).
+    pub gz: i32,
+}
+
+fn sub(v: &Vertex) -> (i64, i64) {
+    (v.x.to_bits() as i64, v.y.to_bits() as i64)
+}
+
+/// The pixels whose centres can lie inside the triangle, or `None`.
+pub(crate) fn pixel_bounds(v: &[Vertex; 3]) -> Option<Rect> {
+    let xs = v.map(|v| v.x.to_bits() as i64);
+    let ys = v.map(|v| v.y.to_bits() as i64);
+    let half = SUBPIXEL / 2;
+    // Pixel px has its centre at 16 px + 8: px in [ceil((min-8)/16), floor((max-8)/16)].
+    let lo = |m: i64| -div_floor(-(m - half), SUBPIXEL);
+    let hi = |m: i64| div_floor(m - half, SUBPIXEL);
+    let (x0, x1) = (lo(*xs.iter().min()?), hi(*xs.iter().max()?));
+    let (y0, y1) = (lo(*ys.iter().min()?), hi(*ys.iter().max()?));
+    (x0 <= x1 && y0 <= y1).then(|| {
+        Rect::new(
+            x0 as i32,
+            y0 as i32,
+            (x1 - x0 + 1) as u32,
+            (y1 - y0 + 1) as u32,
+        )
+    })
+}
+
+impl<L: Lanes> TriangleSetup<L> {
+    /// Sets up a validated triangle; `None` when it has zero area or covers
+    /// no pixel centre.
+    pub fn new<F: PixelFormat<Lanes = L>>(v: &[Vertex; 3]) -> Option<Self> {
+        let bounds = pixel_bounds(v)?;
+        let (p0, mut p1, mut p2) = (sub(&v[0]), sub(&v[1]), sub(&v[2]));
+        let (mut v1, mut v2) = (&v[1], &v[2]);
+        let mut area2 = (p1.0 - p0.0) * (p2.1 - p0.1) - (p1.1 - p0.1) * (p2.0 - p0.0);
+        if area2 == 0 {
+            return None;
+        }
+        if area2 < 0 {
+            core::mem::swap(&mut p1, &mut p2);
+            core::mem::swap(&mut v1, &mut v2);
+            area2 = -area2;
+        }
+        let e = [Edge::new(p1, p2), Edge::new(p2, p0), Edge::new(p0, p1)];
+        let lanes = |v: &Vertex| {
+            let c = v.color;
+            F::lanes_from_rgb([c.r as i64, c.g as i64, c.b as i64].map(|x| x << COLOR_FRAC))
+        };
+        let (c0, c1, c2) = (lanes(&v[0]), lanes(v1), lanes(v2));
+        let dc = [c1.zip(c0, |a, b| a - b), c2.zip(c0, |a, b| a - b)];
+        let zf = |v: &Vertex| (v.z as i32) << Z_FRAC;
+        let z0 = zf(&v[0]);
+        let dz = [zf(v1) - z0, zf(v2) - z0];
+        // Per-pixel steps. |d| * |a| < 2^31 * 2^23; the sum fits i64. A step
+        // larger than the attribute's range only occurs when no two
+        // horizontally adjacent pixel centres are inside, so it is never
+        // used and clamping it is exact.
+        let grad = |d0: i32, d1: i32| {
+            let n = d0 as i64 * e[1].a + d1 as i64 * e[2].a;
+            div_round(n, area2).clamp(-(1 << 30), 1 << 30) as i32
+        };
+        let gc = L::from_fn(|i| grad(dc[0].lane(i), dc[1].lane(i)));
+        let gz = grad(dz[0], dz[1]);
+        Some(TriangleSetup {
+            e,
+            bounds,
+            inv: (1i64 << 62) / area2,
+            c0,
+            dc,
+            z0,
+            dz,
+            gc,
+            gz,
+        })
+    }
+
+    /// Colour and Z at a pixel inside the triangle, from the unbiased edge
+    /// values `e1`, `e2` there (`0 <= e_i <= area2`). Error below 2^-11 LSB.
+    #[inline]
+    pub fn start(&self, e1: i64, e2: i64) -> (L, i32) {
+        let w1 = (e1 * self.inv) >> (62 - W_FRAC);
+        let w2 = (e2 * self.inv) >> (62 - W_FRAC);
+        let half = 1i64 << (W_FRAC - 1);
+        let lerp = |a0: i32, d1: i32, d2: i32| {
+            a0 + ((d1 as i64 * w1 + d2 as i64 * w2 + half) >> W_FRAC) as i32
+        };
+        let c = L::from_fn(|i| lerp(self.c0.lane(i), self.dc[0].lane(i), self.dc[1].lane(i)));
+        (c, lerp(self.z0, self.dz[0], self.dz[1]))
+    }
+}

@@ -1,0 +1,245 @@
+//! The tile framebuffer (pipeline stage *tile planes*): colour, depth and
+//! window-ID planes for up to `8 N` pixels, each plane chosen by type.
+//!
+//! A frame is rendered tile by tile ([`crate::frame`]): a 240x240 RGB565
+//! screen is 115 KB, a 64x32 tile with 16-bit Z is 8 KB. Planes the scene does
+//! not need are `()` — they cost no byte ([`Tile::bits_per_pixel`] reports
+//! the exact cost) and their per-pixel test is the constant `true`.
+
+use crate::command::{Command, State};
+use crate::dither::{Dither, NoDither};
+use crate::error::Error;
+use crate::format::{ColorPlane, Lanes, PixelFormat, Rgb};
+use crate::fragment::{DepthMode, DepthPlane, NoDepth, NoWid, WidMode, WidPlane};
+use crate::frame::Clear;
+use crate::geom::Rect;
+use crate::setup::TriangleSetup;
+use crate::span::SpanStart;
+use crate::traverse::for_each_span;
+use core::marker::PhantomData;
+use embedded_graphics_core::{
+    draw_target::DrawTarget, geometry::Point, geometry::Size, primitives::Rectangle,
+};
+
+/// A tile of up to `8 N` pixels in display format `F`, with depth plane `Z`,
+/// window-ID plane `W` and dither `D`.
+///
+/// ```
+/// use tilerast::prelude::*;
+/// let mut tile: Tile<8, Rgb888Format, Depth16> = Tile::new(); // 64 pixels
+/// tile.begin(Rect::new(16, 8, 8, 8), &Clear::default())?;
+/// tile.draw(&Command::Fill { rect: Rect::new(0, 0, 20, 10), color: Rgb::new(9, 8, 7), state: State::default() })?;
+/// assert_eq!(tile.raw(19, 9), Some(0x090807));
+/// assert_eq!(tile.raw(20, 9), Some(0));      // outside the fill
+/// assert_eq!(tile.raw(15, 9), None);         // outside the tile
+/// assert_eq!(tile.depth(16, 8), Some(0xFFFF));
+/// # Ok::<(), Error>(())
+/// ```
+pub struct Tile<
+    const N: usize,
+    F: PixelFormat,
+    Z: DepthMode = NoDepth,
+    W: WidMode = NoWid,
+    D: Dither = NoDither,
+> {
+    pub(crate) color: F::Plane<N>,
+    pub(crate) depth: Z::Plane<N>,
+    pub(crate) wid: W::Plane<N>,
+    pub(crate) area: Rect,
+    _dither: PhantomData<D>,
+}
+
+impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Default
+    for Tile<N, F, Z, W, D>
+{
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Tile<N, F, Z, W, D> {
+    /// Pixel capacity: `8 N`.
+    pub const CAPACITY: usize = 8 * N;
+
+    /// A tile with no area yet; call [`Tile::begin`].
+    pub fn new() -> Self {
+        Tile {
+            color: ColorPlane::new(),
+            depth: DepthPlane::new(),
+            wid: WidPlane::new(),
+            area: Rect::default(),
+            _dither: PhantomData,
+        }
+    }
+
+    /// Exact RAM cost per pixel of this configuration, in bits (colour + Z + window ID).
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// assert_eq!(Tile::<64, BinaryFormat>::bits_per_pixel(), 1);
+    /// assert_eq!(Tile::<64, Rgb444Format, Depth16, Wid8>::bits_per_pixel(), 16 + 16 + 8);
+    /// assert_eq!(Tile::<64, Rgb888Format, Depth16, Wid8>::bits_per_pixel(), 24 + 16 + 8);
+    /// ```
+    pub fn bits_per_pixel() -> u32 {
+        (Self::plane_bytes() * 8 / Self::CAPACITY) as u32
+    }
+
+    /// Bytes of all planes together (`size_of` of the planes, no padding added).
+    pub fn plane_bytes() -> usize {
+        core::mem::size_of::<F::Plane<N>>()
+            + core::mem::size_of::<Z::Plane<N>>()
+            + core::mem::size_of::<W::Plane<N>>()
+    }
+
+    /// The screen rectangle the tile currently holds.
+    pub fn area(&self) -> Rect {
+        self.area
+    }
+
+    /// Starts a tile at screen rectangle `area` and clears its planes.
+    pub fn begin(&mut self, area: Rect, clear: &Clear) -> Result<(), Error> {
+        if area.w == 0 || area.h == 0 {
+            return Err(Error::BadSize);
+        }
+        if area.area() > Self::CAPACITY as u64 {
+            return Err(Error::TileTooLarge);
+        }
+        self.area = area;
+        let c = F::pack_rgb(clear.color);
+        for i in 0..area.area() as usize {
+            self.color.set(i, c);
+            self.depth.put(i, clear.depth);
+            self.wid.put(i, clear.wid);
+        }
+        Ok(())
+    }
+
+    /// Validates and draws one command, clipped to the tile.
+    pub fn draw(&mut self, cmd: &Command) -> Result<(), Error> {
+        cmd.validate()?;
+        self.draw_valid(cmd);
+        Ok(())
+    }
+
+    /// Draws a command already validated.
+    pub(crate) fn draw_valid(&mut self, cmd: &Command) {
+        match cmd {
+            Command::Triangle { v, state } => {
+                if let Some(t) = TriangleSetup::new::<F>(v) {
+                    self.triangle(&t, state);
+                }
+            }
+            Command::Span { span, state } => self.span_cmd(span, state),
+            Command::Fill { rect, color, state } => self.fill(rect, *color, state),
+            Command::ZFill { rect, z, state } => {
+                let wid = state.wid;
+                self.for_each_pixel(rect, |t, i| {
+                    if t.wid.pass(i, wid) {
+                        t.depth.put(i, *z)
+                    }
+                })
+            }
+            Command::WidFill { rect, wid } => self.for_each_pixel(rect, |t, i| t.wid.put(i, *wid)),
+        }
+    }
+
+    fn triangle(&mut self, t: &TriangleSetup<F::Lanes>, st: &State) {
+        let area = self.area;
+        for_each_span(&t.e, &t.bounds, &area, |py, xr, x0, x1, e1, e2| {
+            // Restart from the plane equation at xr, then advance to x0 by
+            // multiplication: exactly the values x0 - xr DDA steps give, so
+            // the output does not depend on the tiling.
+            let (c, z) = t.start(e1, e2);
+            let k = x0 - xr;
+            let c = c.zip(t.gc, |v, g| (v as i64 + k * g as i64) as i32);
+            let z = (z as i64 + k * t.gz as i64) as i32;
+            self.span(
+                x0,
+                py,
+                x1 - x0,
+                SpanStart {
+                    c,
+                    dc: t.gc,
+                    z,
+                    dz: t.gz,
+                },
+                st,
+            );
+        });
+    }
+
+    fn fill(&mut self, rect: &Rect, color: Rgb, st: &State) {
+        let c = F::pack_rgb(color);
+        let mask = st.plane_mask & F::MASK_ALL;
+        let wid = st.wid;
+        self.for_each_pixel(rect, |t, i| {
+            if t.wid.pass(i, wid) {
+                let v = if mask == F::MASK_ALL {
+                    c
+                } else {
+                    (t.color.get(i) & !mask) | (c & mask)
+                };
+                t.color.set(i, v);
+            }
+        });
+    }
+
+    /// Calls `f(self, index)` for each tile pixel inside `rect`.
+    #[inline]
+    fn for_each_pixel(&mut self, rect: &Rect, mut f: impl FnMut(&mut Self, usize)) {
+        let Some(r) = rect.intersect(&self.area) else {
+            return;
+        };
+        let a = self.area;
+        for y in r.y..r.y1() as i32 {
+            let row = ((y - a.y) as u32 * a.w + (r.x - a.x) as u32) as usize;
+            for i in row..row + r.w as usize {
+                f(self, i);
+            }
+        }
+    }
+
+    fn index(&self, x: i32, y: i32) -> Option<usize> {
+        let a = self.area;
+        let (dx, dy) = (x as i64 - a.x as i64, y as i64 - a.y as i64);
+        ((0..a.w as i64).contains(&dx) && (0..a.h as i64).contains(&dy))
+            .then(|| (dy * a.w as i64 + dx) as usize)
+    }
+
+    /// The packed pixel at screen `(x, y)`, `None` outside the tile.
+    pub fn raw(&self, x: i32, y: i32) -> Option<u32> {
+        self.index(x, y).map(|i| self.color.get(i))
+    }
+
+    /// The colour at screen `(x, y)`, `None` outside the tile.
+    pub fn pixel(&self, x: i32, y: i32) -> Option<F::Color> {
+        self.raw(x, y).map(F::to_color)
+    }
+
+    /// The depth at screen `(x, y)` (65535 without a depth plane).
+    pub fn depth(&self, x: i32, y: i32) -> Option<u16> {
+        self.index(x, y).map(|i| self.depth.read(i))
+    }
+
+    /// The window ID at screen `(x, y)` (0 without a window-ID plane).
+    pub fn wid(&self, x: i32, y: i32) -> Option<u8> {
+        self.index(x, y).map(|i| self.wid.read(i))
+    }
+
+    /// The tile's pixels in row-major order, as colours.
+    pub fn colors(&self) -> impl Iterator<Item = F::Color> + '_ {
+        (0..self.area.area() as usize).map(|i| F::to_color(self.color.get(i)))
+    }
+
+    /// Flushes the tile to a display: one `fill_contiguous` over the tile
+    /// rectangle, converting each pixel to the display's colour type.
+    pub fn flush<T>(&self, target: &mut T) -> Result<(), T::Error>
+    where
+        T: DrawTarget,
+        T::Color: From<F::Color>,
+    {
+        let a = self.area;
+        let rect = Rectangle::new(Point::new(a.x, a.y), Size::new(a.w, a.h));
+        target.fill_contiguous(&rect, self.colors().map(Into::into))
+    }
+}

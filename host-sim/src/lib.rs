@@ -1,0 +1,18 @@
+//! # tilerast-sim
+//!
+//! The host side of tilerast: it reads a scene file ([`scene`]), renders it
+//! with the very same `no_std` core the firmware runs, tile by tile
+//! ([`render`]), writes PNGs ([`image`]), renders the same scene with an f64
+//! reference rasterizer ([`reference`]), and measures the difference
+//! ([`metrics`]).
+
+pub mod image;
+pub mod mesh;
+pub mod metrics;
+pub mod reference;
+pub mod render;
+pub mod scene;
+
+pub use image::Image;
+pub use render::{render, Config, FormatKind, Rendered};
+pub use scene::Scene;

@@ -1,0 +1,121 @@
+//! `tilerast-sim`: render scene files to PNG with the tilerast core, render
+//! the f64 reference, and compare images.
+
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+use std::process::ExitCode;
+use tilerast_sim::{metrics, reference, render, Image, Scene};
+
+#[derive(Parser)]
+#[command(
+    name = "tilerast-sim",
+    version,
+    about = "Host simulator for the tilerast rasterizer"
+)]
+struct Cli {
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Render a scene tile by tile with the fixed-point core.
+    Render {
+        /// Scene file (TOML).
+        scene: PathBuf,
+        /// Output PNG.
+        #[arg(short, long, default_value = "out.png")]
+        output: PathBuf,
+        /// Also write the f64 reference render here and print the difference.
+        #[arg(long)]
+        reference: Option<PathBuf>,
+    },
+    /// Render a scene with the f64 reference renderer.
+    Reference {
+        /// Scene file (TOML).
+        scene: PathBuf,
+        /// Output PNG.
+        #[arg(short, long, default_value = "reference.png")]
+        output: PathBuf,
+    },
+    /// Compare two PNGs: seed 000 eq. 8 colour error, PSNR, max abs error.
+    Compare {
+        /// Test image.
+        a: PathBuf,
+        /// Reference image.
+        b: PathBuf,
+    },
+}
+
+fn run(cli: Cli) -> Result<(), String> {
+    match cli.cmd {
+        Cmd::Render {
+            scene,
+            output,
+            reference: ref_out,
+        } => {
+            let s = Scene::load(&scene)?;
+            let c = &s.config;
+            let r = render(c, &s.commands).map_err(|e| e.to_string())?;
+            println!("scene      {}", scene.display());
+            for n in &s.notes {
+                println!("           {n}");
+            }
+            println!(
+                "screen     {}x{} {}, {} commands",
+                c.width,
+                c.height,
+                c.format.name(),
+                s.commands.len()
+            );
+            let dither = if c.dither > 1 {
+                format!("{0}x{0} ordered (address bits)", c.dither)
+            } else {
+                "none".into()
+            };
+            println!(
+                "pipeline   tile {}x{}, dither {dither}, Z plane {}, window-ID plane {}",
+                c.tile.0,
+                c.tile.1,
+                if c.depth { "16-bit" } else { "none" },
+                if c.wid { "8-bit" } else { "none" }
+            );
+            println!("RAM        {} bits/pixel -> {} bytes per tile (a full frame buffer would be {} bytes)",
+                r.bits_per_pixel, r.tile_bytes(c), (c.width as u64 * c.height as u64 * r.bits_per_pixel as u64).div_ceil(8));
+            println!(
+                "binning    {} tiles, {} command replays",
+                r.stats.tiles, r.stats.replayed
+            );
+            r.image.save_png(&output)?;
+            println!("wrote      {}", output.display());
+            if let Some(path) = ref_out {
+                let img = reference::render(c, &s.commands).to_image();
+                img.save_png(&path)?;
+                println!("wrote      {} (f64 reference)", path.display());
+                println!("{}", metrics::compare(&r.image, &img)?);
+            }
+        }
+        Cmd::Reference { scene, output } => {
+            let s = Scene::load(&scene)?;
+            reference::render(&s.config, &s.commands)
+                .to_image()
+                .save_png(&output)?;
+            println!("wrote {}", output.display());
+        }
+        Cmd::Compare { a, b } => {
+            let d = metrics::compare(&Image::load_png(&a)?, &Image::load_png(&b)?)?;
+            println!("{d}");
+        }
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,236 @@
+//! OBJ meshes to Gouraud triangles: a camera, one directional light, and the
+//! `.mtl` diffuse colours — the geometry side of the pipeline, in f64 on the
+//! host (on a device this is the application's job).
+
+use std::path::Path;
+use tilerast::prelude::*;
+
+/// How a mesh is placed and lit.
+#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshSpec {
+    /// OBJ file, relative to the scene file.
+    pub obj: String,
+    /// Window ID the mesh draws into.
+    #[serde(default)]
+    pub window: u8,
+    /// Screen rectangle `[x, y, w, h]` the camera maps to (default: the screen).
+    pub viewport: Option<[i32; 4]>,
+    /// Camera position (the model is scaled into the cube [-1, 1]^3).
+    #[serde(default = "default_eye")]
+    pub eye: [f64; 3],
+    /// Point the camera looks at.
+    #[serde(default)]
+    pub target: [f64; 3],
+    /// Camera up direction.
+    #[serde(default = "default_up")]
+    pub up: [f64; 3],
+    /// Vertical field of view, degrees.
+    #[serde(default = "default_fov")]
+    pub fov: f64,
+    /// Near and far planes.
+    #[serde(default = "default_clip")]
+    pub clip: [f64; 2],
+    /// Rotation about the model's y axis, degrees.
+    #[serde(default)]
+    pub rotate_y: f64,
+    /// Rotation about the model's x axis, degrees (applied first).
+    #[serde(default)]
+    pub rotate_x: f64,
+    /// Direction towards the light.
+    #[serde(default = "default_light")]
+    pub light: [f64; 3],
+    /// Ambient fraction, 0..1.
+    #[serde(default = "default_ambient")]
+    pub ambient: f64,
+    /// Colour for every group, overriding the `.mtl` diffuse colours.
+    pub color: Option<[u8; 3]>,
+}
+
+fn default_eye() -> [f64; 3] {
+    [0.0, 0.0, 3.0]
+}
+fn default_up() -> [f64; 3] {
+    [0.0, 1.0, 0.0]
+}
+fn default_fov() -> f64 {
+    40.0
+}
+fn default_clip() -> [f64; 2] {
+    [1.0, 5.0]
+}
+fn default_light() -> [f64; 3] {
+    [0.4, 0.6, 1.0]
+}
+fn default_ambient() -> f64 {
+    0.2
+}
+
+/// What loading a mesh produced.
+#[derive(Debug, Clone, Default)]
+pub struct MeshStats {
+    /// Vertices in the file.
+    pub vertices: usize,
+    /// Triangles after triangulation.
+    pub triangles: usize,
+    /// Groups (objects) in the file.
+    pub groups: usize,
+    /// Triangles dropped: behind the near plane or beyond the guard band.
+    pub dropped: usize,
+}
+
+type V3 = [f64; 3];
+fn sub(a: V3, b: V3) -> V3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn dot(a: V3, b: V3) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn cross(a: V3, b: V3) -> V3 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+fn norm(a: V3) -> V3 {
+    let l = dot(a, a).sqrt();
+    if l > 0.0 {
+        a.map(|v| v / l)
+    } else {
+        a
+    }
+}
+
+/// Loads an OBJ and appends its triangles to `out`, one command each.
+pub fn load(
+    spec: &MeshSpec,
+    base: &Path,
+    screen: (u16, u16),
+    out: &mut Vec<Command>,
+) -> Result<MeshStats, String> {
+    let path = base.join(&spec.obj);
+    let opts = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ..Default::default()
+    };
+    let (models, mats) =
+        tobj::load_obj(&path, &opts).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mats = mats.unwrap_or_default();
+    let mut stats = MeshStats {
+        groups: models.len(),
+        ..Default::default()
+    };
+
+    // Unit cube fit (like GLM's glmUnitize).
+    let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
+    for m in &models {
+        for p in m.mesh.positions.chunks_exact(3) {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k] as f64);
+                hi[k] = hi[k].max(p[k] as f64);
+            }
+        }
+    }
+    let center: V3 = std::array::from_fn(|k| (lo[k] + hi[k]) / 2.0);
+    let scale = 2.0
+        / (0..3)
+            .map(|k| hi[k] - lo[k])
+            .fold(f64::MIN_POSITIVE, f64::max);
+
+    let (ry, rx) = (spec.rotate_y.to_radians(), spec.rotate_x.to_radians());
+    let rotate = |p: V3| {
+        let (s, c) = rx.sin_cos();
+        let p = [p[0], c * p[1] - s * p[2], s * p[1] + c * p[2]];
+        let (s, c) = ry.sin_cos();
+        [c * p[0] + s * p[2], p[1], -s * p[0] + c * p[2]]
+    };
+    // Camera basis.
+    let fwd = norm(sub(spec.target, spec.eye));
+    let right = norm(cross(fwd, spec.up));
+    let up = cross(right, fwd);
+    let [vx, vy, vw, vh] = spec
+        .viewport
+        .unwrap_or([0, 0, screen.0 as i32, screen.1 as i32]);
+    let f = 1.0 / (spec.fov.to_radians() / 2.0).tan();
+    let aspect = vw as f64 / vh as f64;
+    let [near, far] = spec.clip;
+    let light = norm(spec.light);
+
+    for m in &models {
+        let mesh = &m.mesh;
+        let pos: Vec<V3> = mesh
+            .positions
+            .chunks_exact(3)
+            .map(|p| rotate(std::array::from_fn(|k| (p[k] as f64 - center[k]) * scale)))
+            .collect();
+        stats.vertices += pos.len();
+        let normals: Vec<V3> = if mesh.normals.len() == mesh.positions.len() {
+            mesh.normals
+                .chunks_exact(3)
+                .map(|n| norm(rotate([n[0] as f64, n[1] as f64, n[2] as f64])))
+                .collect()
+        } else {
+            let mut acc = vec![[0.0; 3]; pos.len()];
+            for t in mesh.indices.chunks_exact(3) {
+                let [a, b, c] = [t[0], t[1], t[2]].map(|i| pos[i as usize]);
+                let n = cross(sub(b, a), sub(c, a)); // area-weighted
+                for &i in t {
+                    acc[i as usize] = std::array::from_fn(|k| acc[i as usize][k] + n[k]);
+                }
+            }
+            acc.into_iter().map(norm).collect()
+        };
+        let kd = match (
+            spec.color,
+            mesh.material_id
+                .and_then(|i| mats.get(i))
+                .and_then(|m| m.diffuse),
+        ) {
+            (Some(c), _) => c.map(|v| v as f64 / 255.0),
+            (None, Some(d)) => d.map(|v| v as f64),
+            (None, None) => [0.8; 3],
+        };
+        let verts: Vec<Option<Vertex>> = pos
+            .iter()
+            .zip(&normals)
+            .map(|(&p, &n)| {
+                let d = sub(p, spec.eye);
+                let (cx, cy, cz) = (dot(d, right), dot(d, up), dot(d, fwd));
+                if cz <= near {
+                    return None;
+                }
+                let (nx, ny) = (f / aspect * cx / cz, f * cy / cz);
+                // Depth: 0 at near, 65535 at far, perspective-correct like OpenGL's window z.
+                let zn = (far / (far - near)) * (1.0 - near / cz);
+                let sx = vx as f64 + (nx + 1.0) / 2.0 * vw as f64;
+                let sy = vy as f64 + (1.0 - ny) / 2.0 * vh as f64;
+                let lit = spec.ambient + (1.0 - spec.ambient) * dot(n, light).max(0.0);
+                let color = kd.map(|k| (k * lit * 255.0).round().clamp(0.0, 255.0) as u8);
+                let z = (zn.clamp(0.0, 1.0) * 65535.0).round() as u16;
+                Vertex::try_from_f32(
+                    sx as f32,
+                    sy as f32,
+                    z,
+                    Rgb::new(color[0], color[1], color[2]),
+                )
+                .ok()
+            })
+            .collect();
+        for t in mesh.indices.chunks_exact(3) {
+            stats.triangles += 1;
+            match [t[0], t[1], t[2]].map(|i| verts[i as usize]) {
+                [Some(a), Some(b), Some(c)] => out.push(Command::Triangle {
+                    v: [a, b, c],
+                    state: State {
+                        wid: spec.window,
+                        ..State::default()
+                    },
+                }),
+                _ => stats.dropped += 1,
+            }
+        }
+    }
+    Ok(stats)
+}

@@ -1,0 +1,202 @@
+//! The f64 reference renderer: the same display list, rendered the obvious
+//! way — every pixel of a triangle's bounding box tested against exact edge
+//! functions (same sub-pixel vertices, same top-left rule), colour and depth
+//! interpolated in f64 with barycentric weights, depth compared in f64, no
+//! dither, no quantization. It shares no rasterization code with the core.
+//!
+//! Partial plane masks are not modelled (a masked command writes its whole
+//! colour): scenes that use them compare with an error.
+
+use crate::image::Image;
+use crate::render::Config;
+use tilerast::prelude::*;
+
+/// An f64 frame: colour on the 0..255 scale (luma replicated for grey
+/// formats) and depth on the 0..65535 scale.
+#[derive(Debug, Clone)]
+pub struct RefFrame {
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+    /// Colour per pixel.
+    pub color: Vec<[f64; 3]>,
+    /// Depth per pixel.
+    pub depth: Vec<f64>,
+    /// Window ID per pixel.
+    pub wid: Vec<u8>,
+}
+
+impl RefFrame {
+    /// Rounded to an 8-bit image.
+    pub fn to_image(&self) -> Image {
+        Image {
+            width: self.width,
+            height: self.height,
+            pixels: self
+                .color
+                .iter()
+                .map(|c| c.map(|v| v.round().clamp(0.0, 255.0) as u8))
+                .collect(),
+        }
+    }
+}
+
+fn rgb(c: Rgb) -> [f64; 3] {
+    [c.r as f64, c.g as f64, c.b as f64]
+}
+
+/// Renders `cmds` in f64.
+pub fn render(cfg: &Config, cmds: &[Command]) -> RefFrame {
+    let (w, h) = (cfg.width as u32, cfg.height as u32);
+    let n = (w * h) as usize;
+    let mut f = RefFrame {
+        width: w,
+        height: h,
+        color: vec![rgb(cfg.clear.color); n],
+        depth: vec![
+            if cfg.depth {
+                cfg.clear.depth as f64
+            } else {
+                f64::INFINITY
+            };
+            n
+        ],
+        wid: vec![cfg.clear.wid; n],
+    };
+    let screen = Rect::new(0, 0, w, h);
+    for cmd in cmds {
+        match cmd {
+            Command::WidFill { rect, wid } => {
+                if cfg.wid {
+                    for_rect(rect, &screen, |x, y| f.wid[(y * w + x) as usize] = *wid);
+                }
+            }
+            Command::Fill { rect, color, state } => for_rect(rect, &screen, |x, y| {
+                let i = (y * w + x) as usize;
+                if !cfg.wid || f.wid[i] == state.wid {
+                    f.color[i] = rgb(*color);
+                }
+            }),
+            Command::ZFill { rect, z, state } => for_rect(rect, &screen, |x, y| {
+                let i = (y * w + x) as usize;
+                if cfg.depth && (!cfg.wid || f.wid[i] == state.wid) {
+                    f.depth[i] = *z as f64;
+                }
+            }),
+            Command::Span { span, state } => {
+                for k in 0..span.len as i64 {
+                    let (x, y) = (span.x as i64 + k, span.y as i64);
+                    if x < 0 || y < 0 || x >= w as i64 || y >= h as i64 {
+                        continue;
+                    }
+                    let lin = |s: f64, d: f64| s + d * k as f64;
+                    let c: [f64; 3] = std::array::from_fn(|i| {
+                        lin(span.color[i].to_num(), span.dcolor[i].to_num())
+                    });
+                    let z = lin(span.z.to_num(), span.dz.to_num());
+                    fragment(
+                        &mut f,
+                        cfg,
+                        (y as u32 * w + x as u32) as usize,
+                        c,
+                        z,
+                        state.wid,
+                    );
+                }
+            }
+            Command::Triangle { v, state } => triangle(&mut f, cfg, v, state.wid),
+        }
+    }
+    if cfg.format.is_gray() {
+        for c in &mut f.color {
+            let y = (77.0 * c[0] + 150.0 * c[1] + 29.0 * c[2]) / 256.0;
+            *c = [y; 3];
+        }
+    }
+    f
+}
+
+fn for_rect(r: &Rect, screen: &Rect, mut f: impl FnMut(u32, u32)) {
+    if let Some(r) = r.intersect(screen) {
+        for y in r.y..r.y1() as i32 {
+            for x in r.x..r.x1() as i32 {
+                f(x as u32, y as u32);
+            }
+        }
+    }
+}
+
+fn fragment(f: &mut RefFrame, cfg: &Config, i: usize, c: [f64; 3], z: f64, wid: u8) {
+    if cfg.wid && f.wid[i] != wid {
+        return;
+    }
+    if cfg.depth {
+        // Less-than, as the core, but on exact (unquantized) depths.
+        if z >= f.depth[i] {
+            return;
+        }
+        f.depth[i] = z;
+    }
+    f.color[i] = c;
+}
+
+fn triangle(f: &mut RefFrame, cfg: &Config, v: &[Vertex; 3], wid: u8) {
+    // Sub-pixel units (1/16 px): exact integers, exact in f64 too.
+    let p: Vec<(i64, i64)> = v
+        .iter()
+        .map(|v| (v.x.to_bits() as i64, v.y.to_bits() as i64))
+        .collect();
+    let mut idx = [0usize, 1, 2];
+    let cross = |a: (i64, i64), b: (i64, i64), c: (i64, i64)| {
+        (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0)
+    };
+    let mut area = cross(p[0], p[1], p[2]);
+    if area == 0 {
+        return;
+    }
+    if area < 0 {
+        idx.swap(1, 2);
+        area = -area;
+    }
+    let q = idx.map(|i| p[i]);
+    let vv = idx.map(|i| v[i]);
+    // Edge i is opposite vertex i; top-left edges own their boundary pixels.
+    let edges = [(q[1], q[2]), (q[2], q[0]), (q[0], q[1])];
+    let owns = |a: (i64, i64), b: (i64, i64)| {
+        let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+        dy < 0 || (dy == 0 && dx > 0)
+    };
+    let min = |k: fn(&(i64, i64)) -> i64| q.iter().map(k).min().unwrap();
+    let max = |k: fn(&(i64, i64)) -> i64| q.iter().map(k).max().unwrap();
+    let px0 = ((min(|p| p.0) - 8) as f64 / 16.0).ceil().max(0.0) as i64;
+    let px1 = ((max(|p| p.0) - 8) as f64 / 16.0)
+        .floor()
+        .min(f.width as f64 - 1.0) as i64;
+    let py0 = ((min(|p| p.1) - 8) as f64 / 16.0).ceil().max(0.0) as i64;
+    let py1 = ((max(|p| p.1) - 8) as f64 / 16.0)
+        .floor()
+        .min(f.height as f64 - 1.0) as i64;
+    for py in py0..=py1 {
+        for px in px0..=px1 {
+            let s = (16 * px + 8, 16 * py + 8);
+            let e = edges.map(|(a, b)| cross(a, b, s));
+            let inside = (0..3).all(|i| e[i] > 0 || (e[i] == 0 && owns(edges[i].0, edges[i].1)));
+            if !inside {
+                continue;
+            }
+            let w = e.map(|e| e as f64 / area as f64);
+            let c: [f64; 3] =
+                std::array::from_fn(|ch| (0..3).map(|i| w[i] * rgb(vv[i].color)[ch]).sum());
+            let z: f64 = (0..3).map(|i| w[i] * vv[i].z as f64).sum();
+            fragment(
+                f,
+                cfg,
+                (py as u32 * f.width + px as u32) as usize,
+                c,
+                z,
+                wid,
+            );
+        }
+    }
+}

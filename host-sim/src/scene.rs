@@ -1,0 +1,429 @@
+//! The scene file format (TOML). A scene sets the screen and the pipeline
+//! configuration, declares windows, and lists commands in drawing order.
+//!
+//! ```toml
+//! [screen]
+//! width = 240                # pixels, 1..=4096
+//! height = 160
+//! format = "rgb444"          # rgb888 | rgb565 | rgb444 | gray8 | binary
+//! tile = [64, 32]            # tile width, height (default 64 x 64)
+//! dither = 8                 # 0 (none) | 2 | 4 | 8 | 16
+//! depth = true               # 16-bit Z plane (default: true)
+//! window_ids = true          # 8-bit window-ID plane (default: on when windows exist)
+//! background = [16, 16, 32]  # clear colour
+//!
+//! [[window]]                 # claims a rectangle for a window ID, in order
+//! id = 1
+//! rect = [8, 8, 150, 120]    # x, y, w, h
+//! background = [40, 40, 60]  # optional: filled inside the window
+//!
+//! [[command]]
+//! kind = "triangle"          # x, y in pixels (1/16 px precision), z 0..65535, r, g, b
+//! window = 1
+//! v = [[10, 10, 100, 255, 0, 0], [100, 20, 100, 0, 255, 0], [50, 90, 100, 0, 0, 255]]
+//!
+//! [[command]]
+//! kind = "span"              # the raster engine's span: start values and per-pixel steps
+//! x = 0
+//! y = 5
+//! len = 100
+//! rgb = [0, 0, 0]
+//! drgb = [2.55, 0, 0]
+//! z = 0
+//! dz = 0
+//!
+//! [[command]]
+//! kind = "fill"              # flat area fill
+//! rect = [0, 0, 10, 10]
+//! rgb = [255, 255, 255]
+//! plane_mask = 0xF800        # optional, in the packed format's bits
+//!
+//! [[command]]
+//! kind = "zfill"
+//! rect = [0, 0, 10, 10]
+//! z = 30000
+//!
+//! [[command]]
+//! kind = "mesh"              # an OBJ with its .mtl colours, camera and light
+//! obj = "../../shared/models/teapot.obj"
+//! eye = [0, 1, 3]
+//! rotate_y = 30
+//! ```
+//!
+//! Every command takes an optional `window` (default 0). Errors name the file,
+//! the line and the problem.
+
+use crate::mesh::{self, MeshSpec, MeshStats};
+use crate::render::{Config, FormatKind};
+use serde::Deserialize;
+use std::path::Path;
+use tilerast::numeric::{ColorFix, ColorStep, ZFix, ZStep, MAX_SIDE};
+use tilerast::prelude::*;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    screen: ScreenSpec,
+    #[serde(default)]
+    window: Vec<toml::Spanned<WindowSpec>>,
+    #[serde(default)]
+    command: Vec<toml::Spanned<CommandSpec>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ScreenSpec {
+    width: u16,
+    height: u16,
+    format: FormatKind,
+    #[serde(default = "default_tile")]
+    tile: [u16; 2],
+    #[serde(default)]
+    dither: u8,
+    #[serde(default = "yes")]
+    depth: bool,
+    window_ids: Option<bool>,
+    #[serde(default)]
+    background: [u8; 3],
+}
+
+fn default_tile() -> [u16; 2] {
+    [64, 64]
+}
+fn yes() -> bool {
+    true
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct WindowSpec {
+    id: u8,
+    rect: [i32; 4],
+    background: Option<[u8; 3]>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
+enum CommandSpec {
+    Triangle {
+        v: [[f64; 6]; 3],
+        #[serde(default)]
+        window: u8,
+        plane_mask: Option<u32>,
+    },
+    Span {
+        x: i32,
+        y: i32,
+        len: u16,
+        rgb: [f64; 3],
+        #[serde(default)]
+        drgb: [f64; 3],
+        #[serde(default)]
+        z: f64,
+        #[serde(default)]
+        dz: f64,
+        #[serde(default)]
+        window: u8,
+        plane_mask: Option<u32>,
+    },
+    Fill {
+        rect: [i32; 4],
+        rgb: [u8; 3],
+        #[serde(default)]
+        window: u8,
+        plane_mask: Option<u32>,
+    },
+    Zfill {
+        rect: [i32; 4],
+        z: u16,
+        #[serde(default)]
+        window: u8,
+    },
+    Mesh(MeshSpec),
+}
+
+/// A loaded scene: its configuration and display list.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// Pipeline configuration.
+    pub config: Config,
+    /// Commands in drawing order (windows first).
+    pub commands: Vec<Command>,
+    /// One line per mesh loaded.
+    pub notes: Vec<String>,
+    /// Mesh statistics, summed.
+    pub mesh: MeshStats,
+}
+
+fn line_of(src: &str, offset: usize) -> usize {
+    src[..offset.min(src.len())]
+        .bytes()
+        .filter(|&b| b == b'\n')
+        .count()
+        + 1
+}
+
+fn rect(r: [i32; 4]) -> Result<Rect, String> {
+    if r[2] < 0 || r[3] < 0 {
+        return Err(format!("rectangle {r:?} has a negative size"));
+    }
+    Ok(Rect::new(r[0], r[1], r[2] as u32, r[3] as u32))
+}
+
+fn fix<T: tilerast::fixed::traits::Fixed>(v: f64, what: &str) -> Result<T, String> {
+    if !v.is_finite() {
+        return Err(format!("{what} is not finite"));
+    }
+    T::checked_from_num(v).ok_or_else(|| format!("{what} = {v} is out of range"))
+}
+
+fn state(window: u8, mask: Option<u32>) -> State {
+    State {
+        wid: window,
+        plane_mask: mask.unwrap_or(u32::MAX),
+    }
+}
+
+impl Scene {
+    /// Reads and checks a scene file; meshes are loaded relative to it.
+    pub fn load(path: impl AsRef<Path>) -> Result<Scene, String> {
+        let path = path.as_ref();
+        let src = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        Scene::parse(&src, path.parent().unwrap_or(Path::new(".")))
+            .map_err(|e| format!("{}:{e}", path.display()))
+    }
+
+    /// Parses scene text; errors start with `line: `.
+    pub fn parse(src: &str, base: &Path) -> Result<Scene, String> {
+        let file: SceneFile = toml::from_str(src).map_err(|e| {
+            let line = e.span().map(|s| line_of(src, s.start)).unwrap_or(0);
+            format!("{line}: {}", e.message().trim())
+        })?;
+        let s = &file.screen;
+        let side_ok = |v: u16| (1..=MAX_SIDE).contains(&v);
+        if !side_ok(s.width) || !side_ok(s.height) {
+            return Err(format!(
+                "1: [screen] size {}x{} must be 1..={MAX_SIDE} per side",
+                s.width, s.height
+            ));
+        }
+        if !side_ok(s.tile[0]) || !side_ok(s.tile[1]) {
+            return Err(format!(
+                "1: [screen] tile {:?} must be 1..={MAX_SIDE} per side",
+                s.tile
+            ));
+        }
+        let tile_px = s.tile[0].min(s.width) as usize * s.tile[1].min(s.height) as usize;
+        if tile_px > crate::render::SIM_GROUPS * 8 {
+            return Err(format!(
+                "1: [screen] tile {:?} exceeds the simulator's {} pixels",
+                s.tile,
+                crate::render::SIM_GROUPS * 8
+            ));
+        }
+        if ![0, 2, 4, 8, 16].contains(&s.dither) {
+            return Err(format!(
+                "1: [screen] dither = {} must be 0, 2, 4, 8 or 16",
+                s.dither
+            ));
+        }
+        let [r, g, b] = s.background;
+        let config = Config {
+            width: s.width,
+            height: s.height,
+            format: s.format,
+            tile: (s.tile[0].min(s.width), s.tile[1].min(s.height)),
+            dither: s.dither,
+            depth: s.depth,
+            wid: s.window_ids.unwrap_or(!file.window.is_empty()),
+            clear: Clear {
+                color: Rgb::new(r, g, b),
+                ..Clear::default()
+            },
+        };
+        let mut commands = Vec::new();
+        let mut notes = Vec::new();
+        let mut mesh_stats = MeshStats::default();
+        for w in &file.window {
+            let line = line_of(src, w.span().start);
+            let w = w.get_ref();
+            let r = rect(w.rect).map_err(|e| format!("{line}: {e}"))?;
+            commands.push(Command::WidFill { rect: r, wid: w.id });
+            if let Some([r0, g0, b0]) = w.background {
+                commands.push(Command::Fill {
+                    rect: r,
+                    color: Rgb::new(r0, g0, b0),
+                    state: state(w.id, None),
+                });
+            }
+        }
+        for c in &file.command {
+            let line = line_of(src, c.span().start);
+            let at = |e: String| format!("{line}: {e}");
+            let cmd = match c.get_ref() {
+                CommandSpec::Triangle {
+                    v,
+                    window,
+                    plane_mask,
+                } => {
+                    let mut vs = [Vertex::default(); 3];
+                    for (k, p) in v.iter().enumerate() {
+                        let ch = |i: usize, name: &str| -> Result<u8, String> {
+                            let x = p[i];
+                            if x.is_finite() && (0.0..=255.0).contains(&x) && x.fract() == 0.0 {
+                                Ok(x as u8)
+                            } else {
+                                Err(format!(
+                                    "vertex {k}: {name} = {x} must be an integer 0..=255"
+                                ))
+                            }
+                        };
+                        let z = p[2];
+                        if !(z.is_finite() && (0.0..=65535.0).contains(&z)) {
+                            return Err(at(format!("vertex {k}: z = {z} must be 0..=65535")));
+                        }
+                        let color = Rgb::new(
+                            ch(3, "r").map_err(at)?,
+                            ch(4, "g").map_err(at)?,
+                            ch(5, "b").map_err(at)?,
+                        );
+                        vs[k] =
+                            Vertex::try_from_f32(p[0] as f32, p[1] as f32, z.round() as u16, color)
+                                .map_err(|e| at(format!("vertex {k}: {e}")))?;
+                    }
+                    Command::Triangle {
+                        v: vs,
+                        state: state(*window, *plane_mask),
+                    }
+                }
+                CommandSpec::Span {
+                    x,
+                    y,
+                    len,
+                    rgb,
+                    drgb,
+                    z,
+                    dz,
+                    window,
+                    plane_mask,
+                } => {
+                    let span = SpanCmd {
+                        x: *x,
+                        y: *y,
+                        len: *len,
+                        color: [0, 1, 2]
+                            .map(|i| fix::<ColorFix>(rgb[i], "rgb"))
+                            .into_iter()
+                            .collect::<Result<Vec<_>, _>>()
+                            .map_err(at)?
+                            .try_into()
+                            .unwrap(),
+                        dcolor: [0, 1, 2]
+                            .map(|i| fix::<ColorStep>(drgb[i], "drgb"))
+                            .into_iter()
+                            .collect::<Result<Vec<_>, _>>()
+                            .map_err(at)?
+                            .try_into()
+                            .unwrap(),
+                        z: fix::<ZFix>(*z, "z").map_err(at)?,
+                        dz: fix::<ZStep>(*dz, "dz").map_err(at)?,
+                    };
+                    span.validate().map_err(|e| at(e.to_string()))?;
+                    Command::Span {
+                        span,
+                        state: state(*window, *plane_mask),
+                    }
+                }
+                CommandSpec::Fill {
+                    rect: r,
+                    rgb,
+                    window,
+                    plane_mask,
+                } => Command::Fill {
+                    rect: rect(*r).map_err(at)?,
+                    color: Rgb::new(rgb[0], rgb[1], rgb[2]),
+                    state: state(*window, *plane_mask),
+                },
+                CommandSpec::Zfill { rect: r, z, window } => Command::ZFill {
+                    rect: rect(*r).map_err(at)?,
+                    z: *z,
+                    state: state(*window, None),
+                },
+                CommandSpec::Mesh(spec) => {
+                    let st = mesh::load(spec, base, (config.width, config.height), &mut commands)
+                        .map_err(at)?;
+                    notes.push(format!(
+                        "mesh {}: {} vertices, {} triangles, {} groups, {} dropped (near plane / guard band)",
+                        spec.obj, st.vertices, st.triangles, st.groups, st.dropped
+                    ));
+                    mesh_stats.vertices += st.vertices;
+                    mesh_stats.triangles += st.triangles;
+                    mesh_stats.groups += st.groups;
+                    mesh_stats.dropped += st.dropped;
+                    continue;
+                }
+            };
+            commands.push(cmd);
+        }
+        Ok(Scene {
+            config,
+            commands,
+            notes,
+            mesh: mesh_stats,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    const HEAD: &str = "[screen]\nwidth = 32\nheight = 16\nformat = \"rgb565\"\n";
+
+    fn err(body: &str) -> String {
+        Scene::parse(&format!("{HEAD}{body}"), Path::new(".")).unwrap_err()
+    }
+
+    #[test]
+    fn errors_name_the_line() {
+        let e = err("\n[[command]]\nkind = \"fill\"\nrect = [0, 0, 4, -4]\nrgb = [1, 2, 3]\n");
+        assert!(e.starts_with("6: ") && e.contains("negative"), "{e}");
+        let e = err("\n[[command]]\nkind = \"triangle\"\nv = [[0, 0, 0, 0, 0, 0], [1e9, 0, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0]]\n");
+        assert!(
+            e.starts_with("6: ") && e.contains("outside the documented range"),
+            "{e}"
+        );
+        let e = err("\n[[command]]\nkind = \"circle\"\n");
+        assert!(e.starts_with("6: ") || e.starts_with("7: "), "{e}");
+        let e = Scene::parse("[screen]\nwidth = 99999\n", Path::new(".")).unwrap_err();
+        assert!(e.starts_with("2: "), "{e}");
+        let e = err("\n[[command]]\nkind = \"span\"\nx = 0\ny = 0\nlen = 300\nrgb = [0, 0, 0]\ndrgb = [1, 0, 0]\n");
+        assert!(e.starts_with("6: ") && e.contains("span"), "{e}");
+    }
+
+    #[test]
+    fn absurd_sizes_are_refused() {
+        let e = Scene::parse(
+            "[screen]\nwidth = 5000\nheight = 5\nformat = \"binary\"\n",
+            Path::new("."),
+        )
+        .unwrap_err();
+        assert!(e.contains("must be 1..=4096"), "{e}");
+        let e = Scene::parse(
+            "[screen]\nwidth = 0\nheight = 5\nformat = \"binary\"\n",
+            Path::new("."),
+        )
+        .unwrap_err();
+        assert!(e.contains("must be 1..=4096"), "{e}");
+    }
+
+    #[test]
+    fn windows_come_first_and_enable_the_plane() {
+        let s = Scene::parse(
+            &format!("{HEAD}[[window]]\nid = 2\nrect = [0, 0, 8, 8]\nbackground = [1, 1, 1]\n"),
+            Path::new("."),
+        )
+        .unwrap();
+        assert!(s.config.wid);
+        assert_eq!(s.commands.len(), 2);
+    }
+}
