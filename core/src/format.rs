@@ -230,6 +230,12 @@ pub trait PixelFormat: 'static {
     }
 }
 
+// `lanes_from_rgb` keeps its input's 16 fraction bits: the DDA format must match.
+const _: () = assert!(
+    COLOR_FRAC == 16,
+    "colour lanes carry the 16 fraction bits of the API's U16F16"
+);
+
 /// Scales one 0..255 channel (8.16) to `0..=max` (x.16), rounded.
 #[inline]
 fn scale(v: i64, max: i32) -> i32 {

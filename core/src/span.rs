@@ -14,7 +14,7 @@ use crate::command::{SpanCmd, State};
 use crate::dither::{quantize, round_bias, Dither};
 use crate::format::{ColorPlane, Lanes, PixelFormat};
 use crate::fragment::{DepthMode, DepthPlane, WidMode, WidPlane};
-use crate::numeric::{z_to_u16, COLOR_FRAC, Z_FRAC};
+use crate::numeric::{z_to_u16, Z_FRAC};
 use crate::tile::Tile;
 
 /// Start values and per-pixel steps of one span, in the DDA formats: colour
@@ -109,7 +109,6 @@ impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Tile<N
         let zshift = 16 - Z_FRAC;
         let z = (at(s.z.to_bits() as i64, s.dz.to_bits() as i64) >> zshift) as i32;
         let dz = crate::numeric::div_round(s.dz.to_bits() as i64, 1 << zshift) as i32;
-        debug_assert!(COLOR_FRAC == 16);
         self.span(x0, s.y as i64, x1 - x0, SpanStart { c, dc, z, dz }, st);
     }
 }

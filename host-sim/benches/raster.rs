@@ -1,1 +1,160 @@
-fn main() {}
+//! Host throughput of the core's inner loops, in pixels per second
+//! (criterion; figures go to the README, never into a timed test).
+//!
+//! Each benchmark renders into one 64x64 tile (512 groups of 8 pixels):
+//! 300 random Gouraud triangles (about 20 px across) with and without Z,
+//! window ID and dither, and flat area fills. Throughput counts pixels
+//! rasterized (covered pixels summed over triangles, overdraw included).
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use std::hint::black_box;
+use tilerast::prelude::*;
+
+const T: u32 = 64;
+type Base<F, Z, W, D> = Tile<512, F, Z, W, D>;
+
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+    fn range(&mut self, lo: i64, hi: i64) -> i64 {
+        lo + (self.next() % (hi - lo) as u64) as i64
+    }
+}
+
+fn triangles() -> Vec<Command> {
+    let mut rng = Rng(0x1234_5678_9ABC_DEF1);
+    (0..300)
+        .map(|_| {
+            let (cx, cy) = (rng.range(0, T as i64 * 16), rng.range(0, T as i64 * 16));
+            let mut v = || {
+                let c = Rgb::new(rng.next() as u8, rng.next() as u8, rng.next() as u8);
+                let (x, y) = (cx + rng.range(-200, 200), cy + rng.range(-200, 200));
+                Vertex::new(
+                    Coord::from_bits(x as i32),
+                    Coord::from_bits(y as i32),
+                    rng.range(0, 65535) as u16,
+                    c,
+                )
+            };
+            Command::Triangle {
+                v: [v(), v(), v()],
+                state: State::default(),
+            }
+        })
+        .collect()
+}
+
+/// Pixels the triangles cover, summed (counted with a plain tile).
+fn covered(cmds: &[Command]) -> u64 {
+    let mut tile: Box<Base<Rgb888Format, NoDepth, NoWid, NoDither>> = Box::default();
+    let area = Rect::new(0, 0, T, T);
+    let mut n = 0;
+    for c in cmds {
+        tile.begin(area, &Clear::default()).unwrap();
+        let white = match *c {
+            Command::Triangle { v, state } => Command::Triangle {
+                v: v.map(|v| Vertex {
+                    color: Rgb::new(255, 255, 255),
+                    ..v
+                }),
+                state,
+            },
+            other => other,
+        };
+        tile.draw(&white).unwrap();
+        n += (0..T as i32)
+            .flat_map(|y| (0..T as i32).map(move |x| (x, y)))
+            .filter(|&(x, y)| tile.raw(x, y) != Some(0))
+            .count() as u64;
+    }
+    n
+}
+
+fn bench_tile<F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither>(
+    c: &mut Criterion,
+    group: &str,
+    name: &str,
+    cmds: &[Command],
+    pixels: u64,
+) {
+    let mut g = c.benchmark_group(group);
+    g.throughput(Throughput::Elements(pixels));
+    let mut tile: Box<Base<F, Z, W, D>> = Box::default();
+    let area = Rect::new(0, 0, T, T);
+    g.bench_function(BenchmarkId::from_parameter(name), |b| {
+        b.iter(|| {
+            tile.begin(area, &Clear::default()).unwrap();
+            for cmd in cmds {
+                tile.draw(black_box(cmd)).unwrap();
+            }
+            black_box(tile.raw(0, 0))
+        })
+    });
+    g.finish();
+}
+
+fn raster(c: &mut Criterion) {
+    let tris = triangles();
+    let px = covered(&tris);
+    bench_tile::<Rgb565Format, NoDepth, NoWid, NoDither>(
+        c,
+        "triangles",
+        "gouraud_rgb565",
+        &tris,
+        px,
+    );
+    bench_tile::<Rgb565Format, Depth16, NoWid, NoDither>(
+        c,
+        "triangles",
+        "gouraud_z_rgb565",
+        &tris,
+        px,
+    );
+    bench_tile::<Rgb565Format, Depth16, Wid8, NoDither>(
+        c,
+        "triangles",
+        "gouraud_z_wid_rgb565",
+        &tris,
+        px,
+    );
+    bench_tile::<Rgb565Format, Depth16, Wid8, Bayer8>(
+        c,
+        "triangles",
+        "gouraud_z_wid_dither8_rgb565",
+        &tris,
+        px,
+    );
+    bench_tile::<Rgb888Format, Depth16, NoWid, NoDither>(
+        c,
+        "triangles",
+        "gouraud_z_rgb888",
+        &tris,
+        px,
+    );
+    bench_tile::<BinaryFormat, Depth16, NoWid, Bayer4>(
+        c,
+        "triangles",
+        "gouraud_z_dither4_binary",
+        &tris,
+        px,
+    );
+
+    let fills: Vec<Command> = (0..16)
+        .map(|i| Command::Fill {
+            rect: Rect::new(0, 0, T, T),
+            color: Rgb::new(i * 16, 100, 200),
+            state: State::default(),
+        })
+        .collect();
+    let fpx = 16 * (T * T) as u64;
+    bench_tile::<Rgb565Format, NoDepth, NoWid, NoDither>(c, "fill", "flat_rgb565", &fills, fpx);
+    bench_tile::<Rgb565Format, NoDepth, Wid8, NoDither>(c, "fill", "flat_wid_rgb565", &fills, fpx);
+}
+
+criterion_group!(benches, raster);
+criterion_main!(benches);

@@ -32,8 +32,8 @@ fn check(w: u16, h: u16, tile: (u16, u16), v: [Vertex; 3]) -> Result<(f64, f64),
         }
         let p = ours.raw[i];
         let got = [(p >> 16) & 255, (p >> 8) & 255, p & 255];
-        for ch in 0..3 {
-            max_c = max_c.max((got[ch] as f64 - exact.color[i][ch]).abs());
+        for (g, e) in got.iter().zip(exact.color[i]) {
+            max_c = max_c.max((*g as f64 - e).abs());
         }
         max_z = max_z.max((ours.depth[i] as f64 - exact.depth[i]).abs());
     }

@@ -1,1 +1,252 @@
-fn main() {}
+//! Project tasks, run with `cargo xtask <task>`:
+//!
+//! - `test`: everything CI checks, installing what a fresh machine lacks —
+//!   the Cortex-M Rust targets (and `rustfmt`/`clippy`) via `rustup`. Runs
+//!   formatting and lint checks, every workspace test (unit, integration,
+//!   property, doc), and the `no_std` core builds for `thumbv6m-none-eabi`
+//!   (Cortex-M0) and `thumbv7em-none-eabihf` (Cortex-M4F), with and without
+//!   its optional features.
+//! - `demo`: renders `scenes/demo.toml` to `demo.png`.
+//! - `bench`: runs the criterion benchmark, writes `reports/bench.md`.
+
+use std::process::{Command, ExitCode};
+
+const THUMB_TARGETS: [&str; 2] = ["thumbv6m-none-eabi", "thumbv7em-none-eabihf"];
+
+fn run(program: &str, args: &[&str]) -> Result<(), String> {
+    eprintln!("xtask: {program} {}", args.join(" "));
+    let status = Command::new(program)
+        .args(args)
+        .status()
+        .map_err(|e| format!("cannot run {program}: {e}"))?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(format!("`{program} {}` failed ({status})", args.join(" ")))
+    }
+}
+
+/// Runs `cargo test`, streaming its output, and returns the totals of its
+/// `test result:` lines (passed, failed).
+fn cargo_test(args: &[&str]) -> Result<(u64, u64), String> {
+    use std::io::{BufRead, BufReader};
+    eprintln!("xtask: cargo {}", args.join(" "));
+    let mut child = Command::new("cargo")
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .map_err(|e| format!("cannot run cargo: {e}"))?;
+    let (mut passed, mut failed) = (0, 0);
+    for line in BufReader::new(child.stdout.take().expect("piped")).lines() {
+        let line = line.map_err(|e| e.to_string())?;
+        println!("{line}");
+        if let Some(rest) = line.strip_prefix("test result: ") {
+            let count = |word: &str| -> u64 {
+                rest.split(';')
+                    .find_map(|part| {
+                        part.trim()
+                            .strip_suffix(word)?
+                            .trim()
+                            .rsplit(' ')
+                            .next()?
+                            .parse()
+                            .ok()
+                    })
+                    .unwrap_or(0)
+            };
+            passed += count("passed");
+            failed += count("failed");
+        }
+    }
+    let status = child.wait().map_err(|e| e.to_string())?;
+    println!("{passed} passed, {failed} failed");
+    if status.success() {
+        Ok((passed, failed))
+    } else {
+        Err(format!("`cargo {}` failed ({status})", args.join(" ")))
+    }
+}
+
+fn output(program: &str, args: &[&str]) -> String {
+    Command::new(program)
+        .args(args)
+        .output()
+        .map(|o| String::from_utf8_lossy(&o.stdout).into_owned())
+        .unwrap_or_default()
+}
+
+/// Installs the thumb targets and the rustfmt/clippy components when missing.
+fn ensure_toolchain() -> Result<(), String> {
+    let installed = output("rustup", &["target", "list", "--installed"]);
+    for t in THUMB_TARGETS {
+        if !installed.lines().any(|l| l.trim() == t) {
+            run("rustup", &["target", "add", t])?;
+        }
+    }
+    let components = output("rustup", &["component", "list", "--installed"]);
+    for c in ["rustfmt", "clippy"] {
+        if !components.lines().any(|l| l.starts_with(c)) {
+            run("rustup", &["component", "add", c])?;
+        }
+    }
+    Ok(())
+}
+
+fn test() -> Result<(), String> {
+    ensure_toolchain()?;
+    run("cargo", &["fmt", "--all", "--", "--check"])?;
+    run(
+        "cargo",
+        &[
+            "clippy",
+            "--workspace",
+            "--all-targets",
+            "--",
+            "-D",
+            "warnings",
+        ],
+    )?;
+    for t in THUMB_TARGETS {
+        run(
+            "cargo",
+            &["build", "-p", "tilerast", "--release", "--target", t],
+        )?;
+        run(
+            "cargo",
+            &[
+                "build",
+                "-p",
+                "tilerast",
+                "--release",
+                "--target",
+                t,
+                "--all-features",
+            ],
+        )?;
+        run(
+            "cargo",
+            &[
+                "clippy",
+                "-p",
+                "tilerast",
+                "--target",
+                t,
+                "--all-features",
+                "--",
+                "-D",
+                "warnings",
+            ],
+        )?;
+    }
+    let (passed, _) = cargo_test(&["test", "--workspace", "--all-features"])?;
+    if passed == 0 {
+        return Err("no test ran".into());
+    }
+    Ok(())
+}
+
+/// Runs the criterion benchmark and writes `reports/bench.md` from
+/// criterion's own estimates (median time per iteration, throughput).
+fn bench() -> Result<(), String> {
+    run(
+        "cargo",
+        &["bench", "-p", "tilerast-sim", "--bench", "raster"],
+    )?;
+    let root = std::path::Path::new("target/criterion");
+    let mut rows = vec![];
+    for group in ["triangles", "fill"] {
+        let dir = root.join(group);
+        let mut names: Vec<_> = std::fs::read_dir(&dir)
+            .map_err(|e| format!("{}: {e}", dir.display()))?
+            .filter_map(|e| e.ok())
+            .filter(|e| e.path().join("new/estimates.json").exists())
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        for name in names {
+            let read = |f: &str| -> Result<serde_json::Value, String> {
+                let p = dir.join(&name).join("new").join(f);
+                let text =
+                    std::fs::read_to_string(&p).map_err(|e| format!("{}: {e}", p.display()))?;
+                serde_json::from_str(&text).map_err(|e| format!("{}: {e}", p.display()))
+            };
+            let ns = read("estimates.json")?["median"]["point_estimate"]
+                .as_f64()
+                .unwrap_or(f64::NAN);
+            let px = read("benchmark.json")?["throughput"]["Elements"]
+                .as_f64()
+                .unwrap_or(f64::NAN);
+            rows.push((format!("{group}/{name}"), ns / px));
+        }
+    }
+    let base = rows
+        .iter()
+        .find(|r| r.0 == "triangles/gouraud_rgb565")
+        .map(|r| r.1)
+        .unwrap_or(f64::NAN);
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|c| {
+            c.lines()
+                .find(|l| l.starts_with("model name"))
+                .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown CPU".into());
+    let mut md = format!(
+        "# Host benchmark (criterion, `cargo xtask bench`)\n\nMachine: {cpu}, {} logical CPUs; {}.\n\n\
+         | benchmark | ns / pixel (median) | Mpixel/s | vs gouraud_rgb565 |\n| --- | ---: | ---: | ---: |\n",
+        std::thread::available_parallelism().map(|n| n.get()).unwrap_or(0),
+        output("rustc", &["--version"]).trim()
+    );
+    for (name, ns) in &rows {
+        md += &format!(
+            "| {name} | {ns:.2} | {:.1} | {:.2} |\n",
+            1e3 / ns,
+            ns / base
+        );
+    }
+    std::fs::create_dir_all("reports").map_err(|e| e.to_string())?;
+    std::fs::write("reports/bench.md", &md).map_err(|e| e.to_string())?;
+    println!("{md}");
+    Ok(())
+}
+
+fn demo() -> Result<(), String> {
+    run(
+        "cargo",
+        &[
+            "run",
+            "--release",
+            "-p",
+            "tilerast-sim",
+            "--",
+            "render",
+            "scenes/demo.toml",
+            "-o",
+            "demo.png",
+        ],
+    )
+}
+
+fn main() -> ExitCode {
+    // Run from the workspace root whatever the caller's directory.
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    if let Err(e) = std::env::set_current_dir(&root) {
+        eprintln!("xtask: cannot enter {}: {e}", root.display());
+        return ExitCode::FAILURE;
+    }
+    let task = std::env::args().nth(1).unwrap_or_default();
+    let result = match task.as_str() {
+        "test" => test(),
+        "demo" => demo(),
+        "bench" => bench(),
+        _ => Err("usage: cargo xtask <test|demo|bench>".into()),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("xtask: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
