@@ -9,30 +9,18 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use std::hint::black_box;
 use tilerast::prelude::*;
+use tilerast_sim::rng::Rng;
 
 const T: u32 = 64;
 type Base<F, Z, W, D> = Tile<512, F, Z, W, D>;
 
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-    fn range(&mut self, lo: i64, hi: i64) -> i64 {
-        lo + (self.next() % (hi - lo) as u64) as i64
-    }
-}
-
 fn triangles() -> Vec<Command> {
-    let mut rng = Rng(0x1234_5678_9ABC_DEF1);
+    let mut rng = Rng::new(0x1234_5678_9ABC_DEF1);
     (0..300)
         .map(|_| {
             let (cx, cy) = (rng.range(0, T as i64 * 16), rng.range(0, T as i64 * 16));
             let mut v = || {
-                let c = Rgb::new(rng.next() as u8, rng.next() as u8, rng.next() as u8);
+                let c = Rgb::new(rng.byte(), rng.byte(), rng.byte());
                 let (x, y) = (cx + rng.range(-200, 200), cy + rng.range(-200, 200));
                 Vertex::new(
                     Coord::from_bits(x as i32),
@@ -101,48 +89,19 @@ fn bench_tile<F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither>(
 fn raster(c: &mut Criterion) {
     let tris = triangles();
     let px = covered(&tris);
-    bench_tile::<Rgb565Format, NoDepth, NoWid, NoDither>(
-        c,
-        "triangles",
-        "gouraud_rgb565",
-        &tris,
-        px,
-    );
-    bench_tile::<Rgb565Format, Depth16, NoWid, NoDither>(
-        c,
-        "triangles",
-        "gouraud_z_rgb565",
-        &tris,
-        px,
-    );
-    bench_tile::<Rgb565Format, Depth16, Wid8, NoDither>(
-        c,
-        "triangles",
-        "gouraud_z_wid_rgb565",
-        &tris,
-        px,
-    );
-    bench_tile::<Rgb565Format, Depth16, Wid8, Bayer8>(
-        c,
-        "triangles",
-        "gouraud_z_wid_dither8_rgb565",
-        &tris,
-        px,
-    );
-    bench_tile::<Rgb888Format, Depth16, NoWid, NoDither>(
-        c,
-        "triangles",
-        "gouraud_z_rgb888",
-        &tris,
-        px,
-    );
-    bench_tile::<BinaryFormat, Depth16, NoWid, Bayer4>(
-        c,
-        "triangles",
-        "gouraud_z_dither4_binary",
-        &tris,
-        px,
-    );
+    macro_rules! tri {
+        ($($f:ty, $z:ty, $w:ty, $d:ty, $name:literal;)*) => {
+            $(bench_tile::<$f, $z, $w, $d>(c, "triangles", $name, &tris, px);)*
+        };
+    }
+    tri! {
+        Rgb565Format, NoDepth, NoWid, NoDither, "gouraud_rgb565";
+        Rgb565Format, Depth16, NoWid, NoDither, "gouraud_z_rgb565";
+        Rgb565Format, Depth16, Wid8, NoDither, "gouraud_z_wid_rgb565";
+        Rgb565Format, Depth16, Wid8, Bayer8, "gouraud_z_wid_dither8_rgb565";
+        Rgb888Format, Depth16, NoWid, NoDither, "gouraud_z_rgb888";
+        BinaryFormat, Depth16, NoWid, Bayer4, "gouraud_z_dither4_binary";
+    }
 
     let fills: Vec<Command> = (0..16)
         .map(|i| Command::Fill {

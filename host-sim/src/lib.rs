@@ -11,6 +11,7 @@ pub mod mesh;
 pub mod metrics;
 pub mod reference;
 pub mod render;
+pub mod rng;
 pub mod scene;
 
 pub use image::Image;

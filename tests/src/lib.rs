@@ -38,30 +38,7 @@ pub fn assert_golden(name: &str, img: &Image) {
     }
 }
 
-/// xorshift64*: deterministic and dependency-free.
-pub struct Rng(u64);
-
-impl Rng {
-    /// A generator from a seed.
-    pub fn new(seed: u64) -> Self {
-        Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
-    }
-    /// Next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-    /// Uniform in `lo..hi`.
-    pub fn range(&mut self, lo: i64, hi: i64) -> i64 {
-        lo + (self.next_u64() % (hi - lo) as u64) as i64
-    }
-    /// A random byte.
-    pub fn byte(&mut self) -> u8 {
-        self.next_u64() as u8
-    }
-}
+pub use tilerast_sim::rng::Rng;
 
 /// A configuration with everything off but the format.
 pub fn config(w: u16, h: u16, format: FormatKind) -> Config {
@@ -94,6 +71,63 @@ pub fn tri(v: [Vertex; 3], wid: u8) -> Command {
         state: State {
             wid,
             ..State::default()
+        },
+    }
+}
+
+/// A random command for a screen of about 100x80 pixels, drawing into window
+/// `wid`, sometimes with a partial plane mask: fills, Z fills, ramps (span
+/// commands whose colour and depth stay in range) and triangles reaching
+/// beyond the screen.
+pub fn random_command(rng: &mut Rng, wid: u8) -> Command {
+    let mask = if rng.range(0, 4) == 0 {
+        rng.next_u64() as u32
+    } else {
+        u32::MAX
+    };
+    let state = State {
+        wid,
+        plane_mask: mask,
+    };
+    match rng.range(0, 5) {
+        0 => Command::Fill {
+            rect: rng.rect((-20, 100), (-20, 80), 90, 70),
+            color: rng.rgb(),
+            state,
+        },
+        1 => Command::ZFill {
+            rect: rng.rect((-20, 100), (-20, 80), 90, 70),
+            z: rng.range(0, 65536) as u16,
+            state,
+        },
+        2 => {
+            let len = rng.range(0, 200) as u16;
+            let steps = (len as i64 - 1).max(1);
+            // From a towards b over the span: the end value lies between them
+            // (a step beyond I16F16's range is shortened towards zero).
+            let mut ramp = |max: i64| {
+                let (a, b) = (rng.range(0, max) << 16, rng.range(0, max) << 16);
+                (
+                    a,
+                    ((b - a) / steps).clamp(-(i32::MAX as i64), i32::MAX as i64),
+                )
+            };
+            let c = [ramp(256), ramp(256), ramp(256)];
+            let (z, dz) = ramp(65536);
+            let span = SpanCmd {
+                x: rng.range(-100, 100) as i32,
+                y: rng.range(-5, 85) as i32,
+                len,
+                color: c.map(|(a, _)| ColorFix::from_bits(a as u32)),
+                dcolor: c.map(|(_, d)| ColorStep::from_bits(d as i32)),
+                z: ZFix::from_bits(z as u32),
+                dz: ZStep::from_bits(dz as i32),
+            };
+            Command::Span { span, state }
+        }
+        _ => Command::Triangle {
+            v: rng.triangle((-400, 1900), (-400, 1500)),
+            state,
         },
     }
 }

@@ -4,7 +4,7 @@
 use proptest::prelude::*;
 use tilerast::prelude::*;
 use tilerast_sim::{render, FormatKind, Scene};
-use tilerast_tests::{config, scene, tri, vsub, Rng};
+use tilerast_tests::{config, random_command, scene, tri, vsub, Rng};
 
 #[test]
 fn demo_scene_is_tile_size_independent() {
@@ -35,52 +35,7 @@ fn random_commands(seed: u64, n: usize) -> Vec<Command> {
     ];
     for _ in 0..n {
         let wid = rng.range(0, 3) as u8;
-        let state = State {
-            wid,
-            plane_mask: if rng.range(0, 4) == 0 {
-                0xF0F0F0
-            } else {
-                u32::MAX
-            },
-        };
-        let c = |rng: &mut Rng| Rgb::new(rng.byte(), rng.byte(), rng.byte());
-        cmds.push(match rng.range(0, 4) {
-            0 => Command::Fill {
-                rect: Rect::new(
-                    rng.range(-20, 90) as i32,
-                    rng.range(-20, 70) as i32,
-                    rng.range(0, 60) as u32,
-                    rng.range(0, 40) as u32,
-                ),
-                color: c(&mut rng),
-                state,
-            },
-            1 => {
-                let len = rng.range(0, 150) as u16;
-                let span = SpanCmd {
-                    x: rng.range(-60, 90) as i32,
-                    y: rng.range(-5, 70) as i32,
-                    len,
-                    color: [ColorFix::from_num(rng.range(0, 256)); 3],
-                    dcolor: [ColorStep::ZERO; 3],
-                    z: ZFix::from_num(rng.range(0, 65536)),
-                    dz: ZStep::ZERO,
-                };
-                Command::Span { span, state }
-            }
-            _ => {
-                let mut v = || {
-                    vsub(
-                        rng.range(-400, 1800),
-                        rng.range(-400, 1400),
-                        rng.range(0, 65536) as u16,
-                        [rng.byte(), rng.byte(), rng.byte()],
-                    )
-                };
-                let v = [v(), v(), v()];
-                Command::Triangle { v, state }
-            }
-        });
+        cmds.push(random_command(&mut rng, wid));
     }
     cmds
 }

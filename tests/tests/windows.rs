@@ -4,7 +4,7 @@
 use proptest::prelude::*;
 use tilerast::prelude::*;
 use tilerast_sim::{render, FormatKind};
-use tilerast_tests::{config, vsub, Rng};
+use tilerast_tests::{config, random_command, Rng};
 
 const W: u16 = 80;
 const H: u16 = 60;
@@ -36,73 +36,6 @@ fn wid_at(x: i32, y: i32) -> u8 {
         }
     }
     id
-}
-
-fn random_command(rng: &mut Rng, wid: u8) -> Command {
-    let state = State {
-        wid,
-        plane_mask: if rng.range(0, 3) == 0 {
-            rng.next_u64() as u32
-        } else {
-            u32::MAX
-        },
-    };
-    match rng.range(0, 4) {
-        0 => Command::Fill {
-            rect: Rect::new(
-                rng.range(-10, 90) as i32,
-                rng.range(-10, 70) as i32,
-                rng.range(0, 90) as u32,
-                rng.range(0, 70) as u32,
-            ),
-            color: Rgb::new(rng.byte(), rng.byte(), rng.byte()),
-            state,
-        },
-        1 => Command::ZFill {
-            rect: Rect::new(
-                rng.range(-10, 90) as i32,
-                rng.range(-10, 70) as i32,
-                rng.range(0, 90) as u32,
-                rng.range(0, 70) as u32,
-            ),
-            z: rng.range(0, 65536) as u16,
-            state,
-        },
-        2 => Command::Span {
-            span: SpanCmd {
-                x: rng.range(-50, 80) as i32,
-                y: rng.range(0, 60) as i32,
-                len: 100,
-                color: [
-                    ColorFix::from_num(10),
-                    ColorFix::from_num(200),
-                    ColorFix::from_num(50),
-                ],
-                dcolor: [
-                    ColorStep::from_num(1),
-                    ColorStep::from_num(-1),
-                    ColorStep::ZERO,
-                ],
-                z: ZFix::from_num(rng.range(0, 1000)),
-                dz: ZStep::from_num(3),
-            },
-            state,
-        },
-        _ => {
-            let mut v = || {
-                vsub(
-                    rng.range(-300, 1500),
-                    rng.range(-300, 1200),
-                    rng.range(0, 65536) as u16,
-                    [rng.byte(), rng.byte(), rng.byte()],
-                )
-            };
-            Command::Triangle {
-                v: [v(), v(), v()],
-                state,
-            }
-        }
-    }
 }
 
 proptest! {
