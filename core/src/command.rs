@@ -16,7 +16,7 @@ use crate::numeric::{ColorFix, ColorStep, Coord, ZFix, ZStep, COORD_LIMIT, SUBPI
 /// let far = Vertex::new(Coord::from_num(9000), Coord::from_num(0), 0, Rgb::default());
 /// assert_eq!(far.validate(), Err(Error::CoordOutOfRange));
 /// ```
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct Vertex {
     /// Column in pixels (4 sub-pixel bits); pixel centres are at `+0.5`.
     pub x: Coord,
@@ -87,12 +87,19 @@ pub struct State {
     pub plane_mask: u32,
 }
 
-impl Default for State {
-    fn default() -> Self {
+impl State {
+    /// Window `wid`, every plane writable.
+    pub const fn new(wid: u8) -> Self {
         State {
-            wid: 0,
+            wid,
             plane_mask: u32::MAX,
         }
+    }
+}
+
+impl Default for State {
+    fn default() -> Self {
+        State::new(0)
     }
 }
 

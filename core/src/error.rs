@@ -24,6 +24,12 @@ pub enum Error {
     BadSize,
     /// The tile rectangle holds more pixels than the tile's capacity.
     TileTooLarge,
+    /// An output buffer is too small for the encoded data.
+    BufferTooSmall,
+    /// Encoded input is truncated or has an unknown tag or version.
+    Malformed,
+    /// A scene's configuration does not match the tile types it is rendered with.
+    ConfigMismatch,
 }
 
 impl core::fmt::Display for Error {
@@ -35,6 +41,9 @@ impl core::fmt::Display for Error {
             Error::SpanOutOfRange => "span values leave their range",
             Error::BadSize => "screen or tile size is zero or too large",
             Error::TileTooLarge => "tile rectangle exceeds tile capacity",
+            Error::BufferTooSmall => "output buffer too small",
+            Error::Malformed => "malformed encoded data",
+            Error::ConfigMismatch => "scene configuration does not match the tile types",
         })
     }
 }

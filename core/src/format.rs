@@ -12,7 +12,7 @@
 
 use crate::numeric::{div_round, COLOR_FRAC};
 use embedded_graphics_core::pixelcolor::{
-    raw::RawU16, BinaryColor, Gray8, PixelColor, Rgb565, Rgb888, RgbColor,
+    raw::RawU16, BinaryColor, Gray8, GrayColor, PixelColor, Rgb565, Rgb888, RgbColor,
 };
 
 /// A 24-bit input colour, 0..255 per channel.
@@ -22,7 +22,7 @@ use embedded_graphics_core::pixelcolor::{
 /// let c = Rgb::new(255, 128, 0);
 /// assert_eq!((c.r, c.g, c.b), (255, 128, 0));
 /// ```
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Rgb {
     /// Red.
@@ -210,6 +210,9 @@ pub trait PixelFormat: 'static {
     fn pack(q: Self::Lanes) -> u32;
     /// Converts a packed pixel to its `embedded-graphics` colour.
     fn to_color(raw: u32) -> Self::Color;
+    /// Packs an `embedded-graphics` colour (what a tile stores when used as
+    /// a `DrawTarget`).
+    fn from_color(c: Self::Color) -> u32;
 
     /// A flat colour, rounded to nearest, packed: what fills write (the seed's
     /// fill bypasses the interpolating channels and the dither).
@@ -236,10 +239,16 @@ const _: () = assert!(
     "colour lanes carry the 16 fraction bits of the API's U16F16"
 );
 
-/// Scales one 0..255 channel (8.16) to `0..=max` (x.16), rounded.
+/// Scales one 0..255 channel (8.16) to `0..=max` (x.16), rounded. Colours
+/// (as opposed to signed steps) take a `u32` path — `v * max + 127` stays
+/// below 2^32 for `v < 2^24`, `max <= 255` — with the same result as the
+/// `i64` one and no 64-bit division (a long library call on Cortex-M0).
 #[inline]
 fn scale(v: i64, max: i32) -> i32 {
-    div_round(v * max as i64, 255) as i32
+    match u32::try_from(v) {
+        Ok(u) if u < 1 << 24 => ((u * max as u32 + 127) / 255) as i32,
+        _ => div_round(v * max as i64, 255) as i32,
+    }
 }
 
 /// Scales RGB (8.16) to a luma lane `0..=max` (x.16), rounded.
@@ -280,6 +289,10 @@ macro_rules! rgb_format {
                     (raw >> BB) as u8 & $g,
                     raw as u8 & $b,
                 )
+            }
+            #[inline]
+            fn from_color(c: $color) -> u32 {
+                Self::pack([c.r() as i32, c.g() as i32, c.b() as i32])
             }
         }
     };
@@ -334,6 +347,9 @@ impl PixelFormat for Gray8Format {
     fn to_color(raw: u32) -> Gray8 {
         Gray8::new(raw as u8)
     }
+    fn from_color(c: Gray8) -> u32 {
+        c.luma() as u32
+    }
 }
 
 /// 1 bit per pixel (SSD1306 class), 8 pixels per byte. Shading shows only
@@ -358,6 +374,9 @@ impl PixelFormat for BinaryFormat {
     fn to_color(raw: u32) -> BinaryColor {
         BinaryColor::from(raw & 1 != 0)
     }
+    fn from_color(c: BinaryColor) -> u32 {
+        c.is_on() as u32
+    }
 }
 
 /// 12-bit RGB colour (4 bits per channel), which `embedded-graphics` lacks.
@@ -380,6 +399,12 @@ impl Rgb444 {
 
 impl PixelColor for Rgb444 {
     type Raw = RawU16;
+}
+
+impl From<Rgb444> for RawU16 {
+    fn from(c: Rgb444) -> Self {
+        RawU16::new(c.0)
+    }
 }
 
 impl RgbColor for Rgb444 {

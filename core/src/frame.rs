@@ -9,8 +9,10 @@ use crate::error::{Error, FlushError};
 use crate::format::{PixelFormat, Rgb};
 use crate::fragment::{DepthMode, WidMode};
 use crate::geom::Rect;
+use crate::list::DisplayList;
 use crate::numeric::MAX_SIDE;
 use crate::tile::Tile;
+use crate::wire::Encoded;
 use embedded_graphics_core::draw_target::DrawTarget;
 
 /// Values every tile starts with.
@@ -43,6 +45,45 @@ pub struct FrameStats {
     pub tiles: u32,
     /// Commands replayed, summed over tiles (binning skips the others).
     pub replayed: u32,
+}
+
+/// Where a frame's commands come from: a slice, a [`DisplayList`], or an
+/// encoded list in flash ([`Encoded`]). Each tile replays the source.
+pub trait CommandSource {
+    /// Checks every command once per frame.
+    fn validate(&self) -> Result<(), Error>;
+    /// Calls `f` with each command, in order. Commands reaching `f` are
+    /// valid (a source that decodes validates as it goes).
+    fn each(&self, f: impl FnMut(&Command)) -> Result<(), Error>;
+}
+
+impl CommandSource for [Command] {
+    fn validate(&self) -> Result<(), Error> {
+        self.iter().try_for_each(Command::validate)
+    }
+    fn each(&self, f: impl FnMut(&Command)) -> Result<(), Error> {
+        self.iter().for_each(f);
+        Ok(())
+    }
+}
+
+impl<const CAP: usize> CommandSource for DisplayList<CAP> {
+    fn validate(&self) -> Result<(), Error> {
+        Ok(()) // validated by `push`
+    }
+    fn each(&self, f: impl FnMut(&Command)) -> Result<(), Error> {
+        self.iter().for_each(f);
+        Ok(())
+    }
+}
+
+impl CommandSource for Encoded<'_> {
+    fn validate(&self) -> Result<(), Error> {
+        self.iter().try_for_each(|c| c.map(drop))
+    }
+    fn each(&self, mut f: impl FnMut(&Command)) -> Result<(), Error> {
+        self.iter().try_for_each(|c| c.map(|c| f(&c)))
+    }
 }
 
 /// A screen cut into tiles.
@@ -111,30 +152,32 @@ impl Frame {
             })
     }
 
-    /// Renders every tile and hands each finished tile to `done` (a flush,
-    /// a hash, a copy into a PNG...). Commands are validated once.
-    pub fn render_with<const N: usize, F, Z, W, D, E>(
+    /// Renders every tile and hands each finished tile to `done` (an
+    /// overlay drawn with `embedded-graphics`, then a flush, a hash, a copy
+    /// into a PNG...). Commands are validated once per frame.
+    pub fn render_with<const N: usize, F, Z, W, D, S, E>(
         &self,
         tile: &mut Tile<N, F, Z, W, D>,
-        cmds: &[Command],
-        mut done: impl FnMut(&Tile<N, F, Z, W, D>) -> Result<(), E>,
+        cmds: &S,
+        mut done: impl FnMut(&mut Tile<N, F, Z, W, D>) -> Result<(), E>,
     ) -> Result<FrameStats, FlushError<E>>
     where
         F: PixelFormat,
         Z: DepthMode,
         W: WidMode,
         D: Dither,
+        S: CommandSource + ?Sized,
     {
-        cmds.iter().try_for_each(Command::validate)?;
+        cmds.validate()?;
         let mut stats = FrameStats::default();
         for area in self.tiles() {
             tile.begin(area, &self.clear)?;
-            for cmd in cmds {
+            cmds.each(|cmd| {
                 if cmd.bounds().and_then(|b| b.intersect(&area)).is_some() {
                     tile.draw_valid(cmd);
                     stats.replayed += 1;
                 }
-            }
+            })?;
             done(tile).map_err(FlushError::Target)?;
             stats.tiles += 1;
         }
@@ -142,10 +185,10 @@ impl Frame {
     }
 
     /// Renders every tile and flushes it to `target`.
-    pub fn render<const N: usize, F, Z, W, D, T>(
+    pub fn render<const N: usize, F, Z, W, D, S, T>(
         &self,
         tile: &mut Tile<N, F, Z, W, D>,
-        cmds: &[Command],
+        cmds: &S,
         target: &mut T,
     ) -> Result<FrameStats, FlushError<T::Error>>
     where
@@ -153,6 +196,7 @@ impl Frame {
         Z: DepthMode,
         W: WidMode,
         D: Dither,
+        S: CommandSource + ?Sized,
         T: DrawTarget,
         T::Color: From<F::Color>,
     {

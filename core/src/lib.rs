@@ -21,6 +21,9 @@
 //! | tile planes | [`tile`] | colour, depth and window-ID planes chosen by type |
 //! | flush | [`tile::Tile::flush`] | the tile to any `embedded-graphics` `DrawTarget` |
 //!
+//! Beside the pipeline: [`wire`] encodes display lists as bytes (for flash),
+//! [`hash`] checks output bit for bit (a CRC32 `DrawTarget`).
+//!
 //! ## Model only what the scene requires
 //!
 //! A [`Tile`](tile::Tile)'s planes are type parameters. An absent depth or
@@ -71,12 +74,14 @@ pub mod format;
 pub mod fragment;
 pub mod frame;
 pub mod geom;
+pub mod hash;
 pub mod list;
 pub mod numeric;
 pub mod setup;
 pub mod span;
 pub mod tile;
 pub mod traverse;
+pub mod wire;
 
 /// The `embedded-graphics-core` crate, whose `DrawTarget` tiles flush to.
 pub use embedded_graphics_core;
@@ -94,7 +99,7 @@ pub mod prelude {
         Rgb888Format,
     };
     pub use crate::fragment::{Depth16, DepthMode, NoDepth, NoWid, Wid8, WidMode};
-    pub use crate::frame::{Clear, Frame, FrameStats};
+    pub use crate::frame::{Clear, CommandSource, Frame, FrameStats};
     pub use crate::geom::Rect;
     pub use crate::list::DisplayList;
     pub use crate::numeric::{ColorFix, ColorStep, Coord, ZFix, ZStep};

@@ -22,7 +22,7 @@
 use crate::command::Vertex;
 use crate::format::{Lanes, PixelFormat};
 use crate::geom::Rect;
-use crate::numeric::{div_floor, div_round, COLOR_FRAC, SUBPIXEL, W_FRAC, Z_FRAC};
+use crate::numeric::{div_round, COLOR_FRAC, SUBPIXEL, SUBPIXEL_BITS, W_FRAC, Z_FRAC};
 
 /// One edge as a function of pixel indices: `E(px, py) = a px + b0 + step py`.
 #[derive(Debug, Clone, Copy)]
@@ -80,23 +80,19 @@ fn sub(v: &Vertex) -> (i64, i64) {
 }
 
 /// The pixels whose centres can lie inside the triangle, or `None`.
+///
+/// Validated coordinates are below 2^18 sub-pixels, so this is `i32` math,
+/// and the divisions by 16 are arithmetic shifts (floor): it runs for every
+/// command in every tile, so it must be cheap on a Cortex-M0.
 pub(crate) fn pixel_bounds(v: &[Vertex; 3]) -> Option<Rect> {
-    let xs = v.map(|v| v.x.to_bits() as i64);
-    let ys = v.map(|v| v.y.to_bits() as i64);
-    let half = SUBPIXEL / 2;
+    let [a, b, c] = v.map(|v| (v.x.to_bits(), v.y.to_bits()));
+    let half = (SUBPIXEL / 2) as i32;
     // Pixel px has its centre at 16 px + 8: px in [ceil((min-8)/16), floor((max-8)/16)].
-    let lo = |m: i64| -div_floor(-(m - half), SUBPIXEL);
-    let hi = |m: i64| div_floor(m - half, SUBPIXEL);
-    let (x0, x1) = (lo(*xs.iter().min()?), hi(*xs.iter().max()?));
-    let (y0, y1) = (lo(*ys.iter().min()?), hi(*ys.iter().max()?));
-    (x0 <= x1 && y0 <= y1).then(|| {
-        Rect::new(
-            x0 as i32,
-            y0 as i32,
-            (x1 - x0 + 1) as u32,
-            (y1 - y0 + 1) as u32,
-        )
-    })
+    let lo = |m: i32| (m - half + (SUBPIXEL as i32 - 1)) >> SUBPIXEL_BITS;
+    let hi = |m: i32| (m - half) >> SUBPIXEL_BITS;
+    let (x0, x1) = (lo(a.0.min(b.0).min(c.0)), hi(a.0.max(b.0).max(c.0)));
+    let (y0, y1) = (lo(a.1.min(b.1).min(c.1)), hi(a.1.max(b.1).max(c.1)));
+    (x0 <= x1 && y0 <= y1).then(|| Rect::new(x0, y0, (x1 - x0 + 1) as u32, (y1 - y0 + 1) as u32))
 }
 
 impl<L: Lanes> TriangleSetup<L> {

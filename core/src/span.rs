@@ -28,6 +28,24 @@ pub(crate) struct SpanStart<L> {
     pub dz: i32,
 }
 
+impl<L: Lanes> SpanStart<L> {
+    /// The values `k` DDA steps further, computed at once: exactly what `k`
+    /// additions give. The products may wrap in `i32`, but the result is a
+    /// value of a pixel inside the primitive, which fits, and two's
+    /// complement arithmetic is exact modulo 2^32 — so no 64-bit multiply.
+    #[inline]
+    pub fn advanced(self, k: i64) -> Self {
+        let k = k as i32;
+        SpanStart {
+            c: self
+                .c
+                .zip(self.dc, |v, d| v.wrapping_add(k.wrapping_mul(d))),
+            z: self.z.wrapping_add(k.wrapping_mul(self.dz)),
+            ..self
+        }
+    }
+}
+
 impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Tile<N, F, Z, W, D> {
     /// Draws `n >= 1` pixels from screen `(x, y)`, which the caller has
     /// clipped to this tile.
@@ -85,9 +103,11 @@ impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Tile<N
         }
     }
 
-    /// The span command: clipped to the tile, with the start values advanced
-    /// exactly (in the command's own 16.16 formats) to the first visible
-    /// pixel, so a span drawn across tiles equals the span drawn whole.
+    /// The span command: clipped to the tile. Its values are converted to
+    /// the DDA formats at a restart point that does not depend on the tiling
+    /// (its first pixel at or right of `min(tile.x, 0)`, exactly, from the
+    /// command's own 16.16 values) and advanced from there to the tile, so a
+    /// span drawn across tiles equals the span drawn whole.
     pub(crate) fn span_cmd(&mut self, s: &SpanCmd, st: &State) {
         let a = self.area;
         if (s.y as i64) < a.y as i64 || s.y as i64 >= a.y1() {
@@ -98,7 +118,8 @@ impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Tile<N
         if x0 >= x1 {
             return;
         }
-        let k = x0 - s.x as i64;
+        let xr = (s.x as i64).max((a.x as i64).min(0));
+        let k = xr - s.x as i64;
         let at = |start: i64, step: i64| start + k * step;
         let rgb = |f: &dyn Fn(usize) -> i64| [f(0), f(1), f(2)];
         // 16.16 inputs to the DDA formats (colour: output scale x.16; Z: 16.14).
@@ -109,6 +130,7 @@ impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Tile<N
         let zshift = 16 - Z_FRAC;
         let z = (at(s.z.to_bits() as i64, s.dz.to_bits() as i64) >> zshift) as i32;
         let dz = crate::numeric::div_round(s.dz.to_bits() as i64, 1 << zshift) as i32;
-        self.span(x0, s.y as i64, x1 - x0, SpanStart { c, dc, z, dz }, st);
+        let start = SpanStart { c, dc, z, dz }.advanced(x0 - xr);
+        self.span(x0, s.y as i64, x1 - x0, start, st);
     }
 }

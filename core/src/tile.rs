@@ -9,7 +9,7 @@
 use crate::command::{Command, State};
 use crate::dither::{Dither, NoDither};
 use crate::error::Error;
-use crate::format::{ColorPlane, Lanes, PixelFormat, Rgb};
+use crate::format::{ColorPlane, PixelFormat, Rgb};
 use crate::fragment::{DepthMode, DepthPlane, NoDepth, NoWid, WidMode, WidPlane};
 use crate::frame::Clear;
 use crate::geom::Rect;
@@ -18,7 +18,10 @@ use crate::span::SpanStart;
 use crate::traverse::for_each_span;
 use core::marker::PhantomData;
 use embedded_graphics_core::{
-    draw_target::DrawTarget, geometry::Point, geometry::Size, primitives::Rectangle,
+    draw_target::DrawTarget,
+    geometry::{Dimensions, Point, Size},
+    primitives::Rectangle,
+    Pixel,
 };
 
 /// A tile of up to `8 N` pixels in display format `F`, with depth plane `Z`,
@@ -150,21 +153,14 @@ impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Tile<N
             // multiplication: exactly the values x0 - xr DDA steps give, so
             // the output does not depend on the tiling.
             let (c, z) = t.start(e1, e2);
-            let k = x0 - xr;
-            let c = c.zip(t.gc, |v, g| (v as i64 + k * g as i64) as i32);
-            let z = (z as i64 + k * t.gz as i64) as i32;
-            self.span(
-                x0,
-                py,
-                x1 - x0,
-                SpanStart {
-                    c,
-                    dc: t.gc,
-                    z,
-                    dz: t.gz,
-                },
-                st,
-            );
+            let start = SpanStart {
+                c,
+                dc: t.gc,
+                z,
+                dz: t.gz,
+            }
+            .advanced(x0 - xr);
+            self.span(x0, py, x1 - x0, start, st);
         });
     }
 
@@ -241,5 +237,48 @@ impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Tile<N
         let a = self.area;
         let rect = Rectangle::new(Point::new(a.x, a.y), Size::new(a.w, a.h));
         target.fill_contiguous(&rect, self.colors().map(Into::into))
+    }
+}
+
+impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Dimensions
+    for Tile<N, F, Z, W, D>
+{
+    /// The tile's screen rectangle: `embedded-graphics` drawing is clipped to it.
+    fn bounding_box(&self) -> Rectangle {
+        let a = self.area;
+        Rectangle::new(Point::new(a.x, a.y), Size::new(a.w, a.h))
+    }
+}
+
+/// A tile is itself a `DrawTarget` in screen coordinates: text and
+/// primitives drawn with `embedded-graphics` land on top of (or, drawn
+/// before the commands, under) the rasterized content, clipped to the tile.
+/// They write colour only: no window-ID or Z test, no plane mask.
+///
+/// ```
+/// use tilerast::prelude::*;
+/// use embedded_graphics_core::{pixelcolor::Rgb565, prelude::*};
+/// let mut tile: Tile<8, Rgb565Format> = Tile::new();
+/// tile.begin(Rect::new(8, 0, 8, 8), &Clear::default())?;
+/// tile.draw_iter([Pixel(Point::new(9, 1), Rgb565::RED), Pixel(Point::new(0, 0), Rgb565::RED)]).ok();
+/// assert_eq!(tile.pixel(9, 1), Some(Rgb565::RED));
+/// # Ok::<(), Error>(())
+/// ```
+impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> DrawTarget
+    for Tile<N, F, Z, W, D>
+{
+    type Color = F::Color;
+    type Error = core::convert::Infallible;
+
+    fn draw_iter<I: IntoIterator<Item = Pixel<F::Color>>>(
+        &mut self,
+        pixels: I,
+    ) -> Result<(), Self::Error> {
+        for Pixel(p, c) in pixels {
+            if let Some(i) = self.index(p.x, p.y) {
+                self.color.set(i, F::from_color(c));
+            }
+        }
+        Ok(())
     }
 }

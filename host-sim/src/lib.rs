@@ -11,7 +11,8 @@ pub mod mesh;
 pub mod metrics;
 pub mod reference;
 pub mod render;
-pub mod rng;
+/// The deterministic PRNG, shared with the firmware workloads.
+pub use tilerast_fw::rng;
 pub mod scene;
 
 pub use image::Image;

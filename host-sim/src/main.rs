@@ -38,6 +38,14 @@ enum Cmd {
         #[arg(short, long, default_value = "reference.png")]
         output: PathBuf,
     },
+    /// Encode a scene for firmware flash (header + commands, `tilerast::wire`).
+    Export {
+        /// Scene file (TOML).
+        scene: PathBuf,
+        /// Output file.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
     /// Compare two PNGs: seed 000 eq. 8 colour error, PSNR, max abs error.
     Compare {
         /// Test image.
@@ -101,6 +109,17 @@ fn run(cli: Cli) -> Result<(), String> {
                 .to_image()
                 .save_png(&output)?;
             println!("wrote {}", output.display());
+        }
+        Cmd::Export { scene, output } => {
+            let s = Scene::load(&scene)?;
+            let bytes = s.encode().map_err(|e| e.to_string())?;
+            std::fs::write(&output, &bytes).map_err(|e| format!("{}: {e}", output.display()))?;
+            println!(
+                "wrote {} ({} commands, {} bytes)",
+                output.display(),
+                s.commands.len(),
+                bytes.len()
+            );
         }
         Cmd::Compare { a, b } => {
             let d = metrics::compare(&Image::load_png(&a)?, &Image::load_png(&b)?)?;

@@ -374,6 +374,71 @@ impl Scene {
     }
 }
 
+impl Scene {
+    /// The wire-format header of this scene (`tilerast::wire`).
+    pub fn header(&self) -> tilerast::wire::SceneHeader {
+        let c = &self.config;
+        let mut format = [0u8; 8];
+        format[..c.format.name().len()].copy_from_slice(c.format.name().as_bytes());
+        tilerast::wire::SceneHeader {
+            width: c.width,
+            height: c.height,
+            tile: c.tile,
+            format,
+            dither_log2: c.dither.max(1).trailing_zeros() as u8,
+            depth_bits: if c.depth { 16 } else { 0 },
+            wid_bits: if c.wid { 8 } else { 0 },
+            clear: c.clear,
+        }
+    }
+
+    /// The scene as firmware stores it in flash: header, then commands,
+    /// with runs of triangles that share a state (an OBJ group) packed as
+    /// indexed meshes. Decoding yields exactly [`Scene::commands`].
+    pub fn encode(&self) -> Result<Vec<u8>, Error> {
+        use tilerast::wire::{self, HEADER_LEN, MAX_ENCODED};
+        let mut out = vec![0u8; HEADER_LEN];
+        self.header().encode(&mut out)?;
+        let small = |v: &[Vertex; 3]| {
+            v.iter().all(|v| {
+                i16::try_from(v.x.to_bits()).is_ok() && i16::try_from(v.y.to_bits()).is_ok()
+            })
+        };
+        let cmds = &self.commands;
+        let mut i = 0;
+        while i < cmds.len() {
+            if let Command::Triangle { v, state } = &cmds[i] {
+                if small(v) {
+                    let mut verts: Vec<Vertex> = Vec::new();
+                    let mut index = std::collections::HashMap::new();
+                    let mut tris = Vec::new();
+                    while let Some(Command::Triangle { v, state: s }) = cmds.get(i) {
+                        if s != state || !small(v) || verts.len() + 3 > u16::MAX as usize {
+                            break;
+                        }
+                        tris.push(v.map(|v| {
+                            *index.entry(v).or_insert_with(|| {
+                                verts.push(v);
+                                (verts.len() - 1) as u16
+                            })
+                        }));
+                        i += 1;
+                    }
+                    let mut buf = vec![0u8; 16 + verts.len() * 9 + tris.len() * 6];
+                    let n = wire::encode_mesh(&verts, &tris, state, &mut buf)?;
+                    out.extend_from_slice(&buf[..n]);
+                    continue;
+                }
+            }
+            let mut buf = [0u8; MAX_ENCODED];
+            let n = wire::encode(&cmds[i], &mut buf)?;
+            out.extend_from_slice(&buf[..n]);
+            i += 1;
+        }
+        Ok(out)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

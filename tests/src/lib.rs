@@ -131,3 +131,12 @@ pub fn random_command(rng: &mut Rng, wid: u8) -> Command {
         },
     }
 }
+
+/// Property-test case count: `default`, or `PROPTEST_CASES` when set (to
+/// run a deeper search locally than CI's time budget allows).
+pub fn cases(default: u32) -> u32 {
+    std::env::var("PROPTEST_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+}

@@ -59,7 +59,7 @@ fn vertex() -> impl Strategy<Value = Vertex> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(200))]
+    #![proptest_config(ProptestConfig::with_cases(tilerast_tests::cases(200)))]
     #[test]
     fn gouraud_and_z_within_bound(v in [vertex(), vertex(), vertex()], tw in 5u16..96, th in 5u16..64) {
         check(96, 64, (tw, th), v)?;

@@ -193,6 +193,7 @@ fn bad_sizes_and_oversized_tiles_are_errors() {
         Err(Error::BadSize)
     );
     let frame = Frame::new(10, 10, 5, 4).unwrap();
-    let r = frame.render_with(&mut tile, &[], |_| Ok::<(), ()>(()));
+    let none: &[Command] = &[];
+    let r = frame.render_with(&mut tile, none, |_| Ok::<(), ()>(()));
     assert_eq!(r, Err(FlushError::Raster(Error::TileTooLarge)));
 }

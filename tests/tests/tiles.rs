@@ -41,7 +41,7 @@ fn random_commands(seed: u64, n: usize) -> Vec<Command> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(24))]
+    #![proptest_config(ProptestConfig::with_cases(tilerast_tests::cases(24)))]
     #[test]
     fn random_frames_are_tile_size_independent(seed in any::<u64>(), tw in 1u16..90, th in 1u16..70, fmt in 0usize..5, dither in prop::sample::select(vec![0u8, 2, 4, 8])) {
         let formats = [FormatKind::Rgb888, FormatKind::Rgb565, FormatKind::Rgb444, FormatKind::Gray8, FormatKind::Binary];

@@ -39,7 +39,7 @@ fn wid_at(x: i32, y: i32) -> u8 {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(48))]
+    #![proptest_config(ProptestConfig::with_cases(tilerast_tests::cases(48)))]
     #[test]
     fn commands_stay_inside_their_window(seed in any::<u64>(), wid in 0u8..4, fmt in 0usize..5, tw in 7u16..80) {
         let formats = [FormatKind::Rgb888, FormatKind::Rgb565, FormatKind::Rgb444, FormatKind::Gray8, FormatKind::Binary];

@@ -5,9 +5,13 @@
 //!   formatting and lint checks, every workspace test (unit, integration,
 //!   property, doc), and the `no_std` core builds for `thumbv6m-none-eabi`
 //!   (Cortex-M0) and `thumbv7em-none-eabihf` (Cortex-M4F), with and without
-//!   its optional features.
+//!   its optional features; installs `qemu-system-arm` (apt) when missing,
+//!   builds the real-board example, and builds and runs both QEMU firmwares,
+//!   checking that their output is bit-identical to the host's.
 //! - `demo`: renders `scenes/demo.toml` to `demo.png`.
 //! - `bench`: runs the criterion benchmark, writes `reports/bench.md`.
+//! - `report`: runs the firmware under QEMU, writes `reports/targets.md`
+//!   (instructions per pixel on Cortex-M0/M4, flash, RAM, stack).
 
 use std::process::{Command, ExitCode};
 
@@ -67,6 +71,24 @@ fn cargo_test(args: &[&str]) -> Result<(u64, u64), String> {
     }
 }
 
+/// [`run`] in another directory (a firmware workspace).
+fn run_in(dir: &str, program: &str, args: &[&str]) -> Result<(), String> {
+    eprintln!("xtask: (in {dir}) {program} {}", args.join(" "));
+    let status = Command::new(program)
+        .current_dir(dir)
+        .args(args)
+        .status()
+        .map_err(|e| format!("cannot run {program}: {e}"))?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(format!(
+            "`{program} {}` in {dir} failed ({status})",
+            args.join(" ")
+        ))
+    }
+}
+
 fn output(program: &str, args: &[&str]) -> String {
     Command::new(program)
         .args(args)
@@ -92,8 +114,36 @@ fn ensure_toolchain() -> Result<(), String> {
     Ok(())
 }
 
+/// Installs `qemu-system-arm` (Debian package) when it is missing.
+fn ensure_qemu() -> Result<(), String> {
+    let found = Command::new("qemu-system-arm")
+        .arg("--version")
+        .output()
+        .map(|o| o.status.success());
+    if found.unwrap_or(false) {
+        return Ok(());
+    }
+    let sudo = if output("id", &["-u"]).trim() == "0" {
+        vec![]
+    } else {
+        vec!["sudo"]
+    };
+    let apt = |args: &[&str]| {
+        let mut all = sudo.clone();
+        all.push("apt-get");
+        all.extend_from_slice(args);
+        run(all[0], &all[1..])
+    };
+    apt(&["update", "-qq"])?;
+    apt(&["install", "-y", "-qq", "qemu-system-arm"])
+}
+
+/// The firmware crates, each its own workspace, built like a user would.
+const BOARDS: [&str; 3] = ["mps2-an386", "microbit", "rp-pico-st7789"];
+
 fn test() -> Result<(), String> {
     ensure_toolchain()?;
+    ensure_qemu()?;
     run("cargo", &["fmt", "--all", "--", "--check"])?;
     run(
         "cargo",
@@ -138,10 +188,40 @@ fn test() -> Result<(), String> {
             ],
         )?;
     }
-    let (passed, _) = cargo_test(&["test", "--workspace", "--all-features"])?;
+    // The real-board example must build (it cannot run here); the QEMU
+    // boards are built and run by the firmware test below.
+    run_in("targets/rp-pico-st7789", "cargo", &["build", "--release"])?;
+    run_in(
+        "targets/rp-pico-st7789",
+        "cargo",
+        &["clippy", "--release", "--", "-D", "warnings"],
+    )?;
+    for b in BOARDS {
+        run_in(&format!("targets/{b}"), "cargo", &["fmt", "--", "--check"])?;
+    }
+    // Every test, the firmware one (QEMU) included.
+    let (passed, _) = cargo_test(&["test", "--workspace", "--", "--include-ignored"])?;
     if passed == 0 {
         return Err("no test ran".into());
     }
+    // The firmware test exported the scenes the QEMU boards embed: lint them too.
+    let scenes = std::fs::canonicalize("target/tmp/scenes")
+        .map_err(|e| format!("target/tmp/scenes: {e}"))?;
+    for b in ["mps2-an386", "microbit"] {
+        let dir = format!("targets/{b}");
+        eprintln!("xtask: (in {dir}) cargo clippy --release -- -D warnings");
+        let st = Command::new("cargo")
+            .current_dir(&dir)
+            .env("TILERAST_SCENES", &scenes)
+            .args(["clippy", "--release", "--", "-D", "warnings"])
+            .status()
+            .map_err(|e| e.to_string())?;
+        if !st.success() {
+            return Err(format!("clippy failed in {dir}"));
+        }
+    }
+    // The closing line CI reads.
+    println!("{passed} passed, 0 failed");
     Ok(())
 }
 
@@ -211,6 +291,38 @@ fn bench() -> Result<(), String> {
     Ok(())
 }
 
+/// Runs the firmware under QEMU and writes `reports/targets.md`.
+fn report() -> Result<(), String> {
+    ensure_toolchain()?;
+    ensure_qemu()?;
+    std::fs::create_dir_all("reports").map_err(|e| e.to_string())?;
+    let path = std::fs::canonicalize("reports")
+        .map_err(|e| e.to_string())?
+        .join("targets.md");
+    let status = Command::new("cargo")
+        .args([
+            "test",
+            "-p",
+            "tilerast-tests",
+            "--test",
+            "firmware",
+            "--",
+            "--include-ignored",
+            "--nocapture",
+        ])
+        .env("TILERAST_REPORT", &path)
+        .status()
+        .map_err(|e| e.to_string())?;
+    if !status.success() {
+        return Err("firmware test failed".into());
+    }
+    print!(
+        "{}",
+        std::fs::read_to_string(&path).map_err(|e| e.to_string())?
+    );
+    Ok(())
+}
+
 fn demo() -> Result<(), String> {
     run(
         "cargo",
@@ -240,7 +352,8 @@ fn main() -> ExitCode {
         "test" => test(),
         "demo" => demo(),
         "bench" => bench(),
-        _ => Err("usage: cargo xtask <test|demo|bench>".into()),
+        "report" => report(),
+        _ => Err("usage: cargo xtask <test|demo|bench|report>".into()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,154 @@
+//! Output checking: a CRC32 of the pixel stream a display would receive.
+//! Firmware renders into a [`CrcTarget`] and reports the CRC; the host
+//! renders the same scene the same way and must get the same number — the
+//! proof that x86-64, Cortex-M0 and Cortex-M4 produce the same bytes.
+
+use embedded_graphics_core::{
+    draw_target::DrawTarget,
+    geometry::{OriginDimensions, Size},
+    pixelcolor::{raw::RawData, IntoStorage, PixelColor},
+    primitives::Rectangle,
+    Pixel,
+};
+
+/// CRC-32 (IEEE 802.3, reflected, as zlib), with a 16-entry table.
+///
+/// ```
+/// use tilerast::hash::Crc32;
+/// let mut c = Crc32::new();
+/// c.update(b"123456789");
+/// assert_eq!(c.finish(), 0xCBF4_3926);
+/// ```
+#[derive(Debug, Clone, Copy)]
+pub struct Crc32(u32);
+
+const NIBBLE: [u32; 16] = {
+    let mut t = [0u32; 16];
+    let mut i = 0;
+    while i < 16 {
+        let mut c = i as u32;
+        let mut k = 0;
+        while k < 4 {
+            c = if c & 1 != 0 {
+                (c >> 1) ^ 0xEDB8_8320
+            } else {
+                c >> 1
+            };
+            k += 1;
+        }
+        t[i] = c;
+        i += 1;
+    }
+    t
+};
+
+impl Default for Crc32 {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Crc32 {
+    /// A fresh CRC.
+    pub const fn new() -> Self {
+        Crc32(!0)
+    }
+    /// Adds bytes.
+    pub fn update(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            let mut c = self.0 ^ b as u32;
+            c = (c >> 4) ^ NIBBLE[(c & 15) as usize];
+            c = (c >> 4) ^ NIBBLE[(c & 15) as usize];
+            self.0 = c;
+        }
+    }
+    /// The CRC of everything added so far.
+    pub const fn finish(&self) -> u32 {
+        !self.0
+    }
+}
+
+/// A `DrawTarget` of a given size that stores nothing and hashes every
+/// colour it receives, in order, as its raw storage value in little-endian
+/// bytes (`ceil(bits / 8)` bytes per pixel).
+///
+/// ```
+/// use tilerast::hash::CrcTarget;
+/// use embedded_graphics_core::{pixelcolor::Rgb565, prelude::*, primitives::Rectangle};
+/// let mut t = CrcTarget::<Rgb565>::new(Size::new(2, 1));
+/// t.fill_contiguous(&Rectangle::new(Point::zero(), Size::new(2, 1)), [Rgb565::RED, Rgb565::BLUE])?;
+/// assert_eq!(t.pixels(), 2);
+/// # Ok::<(), core::convert::Infallible>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct CrcTarget<C> {
+    crc: Crc32,
+    size: Size,
+    pixels: u32,
+    _color: core::marker::PhantomData<C>,
+}
+
+impl<C> CrcTarget<C> {
+    /// A target of `size` pixels.
+    pub fn new(size: Size) -> Self {
+        CrcTarget {
+            crc: Crc32::new(),
+            size,
+            pixels: 0,
+            _color: core::marker::PhantomData,
+        }
+    }
+    /// The CRC of the stream so far.
+    pub fn crc(&self) -> u32 {
+        self.crc.finish()
+    }
+    /// Pixels received.
+    pub fn pixels(&self) -> u32 {
+        self.pixels
+    }
+}
+
+impl<C> CrcTarget<C>
+where
+    C: PixelColor + IntoStorage,
+    C::Storage: Into<u32>,
+{
+    fn add(&mut self, c: C) {
+        let bytes = C::Raw::BITS_PER_PIXEL.div_ceil(8);
+        let v: u32 = c.into_storage().into();
+        self.crc.update(&v.to_le_bytes()[..bytes]);
+        self.pixels += 1;
+    }
+}
+
+impl<C> OriginDimensions for CrcTarget<C> {
+    fn size(&self) -> Size {
+        self.size
+    }
+}
+
+impl<C> DrawTarget for CrcTarget<C>
+where
+    C: PixelColor + IntoStorage,
+    C::Storage: Into<u32>,
+{
+    type Color = C;
+    type Error = core::convert::Infallible;
+
+    fn draw_iter<I: IntoIterator<Item = Pixel<C>>>(
+        &mut self,
+        pixels: I,
+    ) -> Result<(), Self::Error> {
+        pixels.into_iter().for_each(|Pixel(_, c)| self.add(c));
+        Ok(())
+    }
+
+    fn fill_contiguous<I: IntoIterator<Item = C>>(
+        &mut self,
+        _: &Rectangle,
+        colors: I,
+    ) -> Result<(), Self::Error> {
+        colors.into_iter().for_each(|c| self.add(c));
+        Ok(())
+    }
+}

@@ -1,0 +1,561 @@
+//! The display-list wire format: commands as little-endian bytes, so a scene
+//! converted on the host lives in a firmware's flash and is replayed tile by
+//! tile without ever being copied to RAM. This layer only encodes and
+//! decodes; drawing is [`crate::tile`]'s business.
+//!
+//! Each command starts with a tag byte: the low 7 bits name the command, bit
+//! 7 says a 4-byte plane mask follows the window ID.
+//!
+//! | tag | command | body after `wid` \[`mask`\] |
+//! | --- | --- | --- |
+//! | 1 | triangle, 32-bit coordinates | 3 x (`x: i32, y: i32, z: u16, r, g, b`) |
+//! | 2 | triangle, 16-bit coordinates (`\|x\|, \|y\| < 2048` px) | 3 x (`x: i16, y: i16, z: u16, r, g, b`) |
+//! | 3 | span | `x: i32, y: i32, len: u16, rgb: 3 x u32, drgb: 3 x i32, z: u32, dz: i32` (raw 16.16) |
+//! | 4 | fill | `x: i32, y: i32, w: u32, h: u32, r, g, b` |
+//! | 5 | Z fill | `x: i32, y: i32, w: u32, h: u32, z: u16` |
+//! | 6 | window-ID fill | `x: i32, y: i32, w: u32, h: u32` (its `wid` is the ID; no mask) |
+//! | 7 | indexed mesh: triangles sharing vertices | `nv: u16, nt: u16`, `nv` x (`x: i16, y: i16, z: u16, r, g, b`), `nt` x 3 x `u16` index |
+//!
+//! A mesh record replays as its `nt` triangles, in order, each with the
+//! record's state — the same commands as the triangles written one by one,
+//! in about 40% of the bytes for a typical OBJ model ([`encode_mesh`]).
+//!
+//! Decoding validates every command ([`Command::validate`]).
+
+use crate::command::{Command, SpanCmd, State, Vertex};
+use crate::error::Error;
+use crate::format::Rgb;
+use crate::geom::Rect;
+use crate::numeric::{ColorFix, ColorStep, Coord, ZFix, ZStep};
+
+const MASK_FLAG: u8 = 0x80;
+
+/// Largest encoded command, in bytes.
+pub const MAX_ENCODED: usize = 64;
+
+/// Writes little-endian fields into a buffer.
+struct Writer<'a> {
+    buf: &'a mut [u8],
+    pos: usize,
+}
+
+impl Writer<'_> {
+    fn put(&mut self, bytes: &[u8]) -> Result<(), Error> {
+        let end = self.pos + bytes.len();
+        self.buf
+            .get_mut(self.pos..end)
+            .ok_or(Error::BufferTooSmall)?
+            .copy_from_slice(bytes);
+        self.pos = end;
+        Ok(())
+    }
+}
+
+/// Reads little-endian fields.
+struct Reader<'a> {
+    buf: &'a [u8],
+    pos: usize,
+}
+
+impl Reader<'_> {
+    fn take<const K: usize>(&mut self) -> Result<[u8; K], Error> {
+        let s = self
+            .buf
+            .get(self.pos..self.pos + K)
+            .ok_or(Error::Malformed)?;
+        self.pos += K;
+        Ok(s.try_into().unwrap_or([0; K]))
+    }
+    fn u8(&mut self) -> Result<u8, Error> {
+        Ok(self.take::<1>()?[0])
+    }
+    fn u16(&mut self) -> Result<u16, Error> {
+        self.take().map(u16::from_le_bytes)
+    }
+    fn i16(&mut self) -> Result<i16, Error> {
+        self.take().map(i16::from_le_bytes)
+    }
+    fn u32(&mut self) -> Result<u32, Error> {
+        self.take().map(u32::from_le_bytes)
+    }
+    fn i32(&mut self) -> Result<i32, Error> {
+        self.take().map(i32::from_le_bytes)
+    }
+    fn rgb(&mut self) -> Result<Rgb, Error> {
+        let [r, g, b] = self.take()?;
+        Ok(Rgb::new(r, g, b))
+    }
+    fn rect(&mut self) -> Result<Rect, Error> {
+        Ok(Rect::new(
+            self.i32()?,
+            self.i32()?,
+            self.u32()?,
+            self.u32()?,
+        ))
+    }
+}
+
+fn rect_bytes(w: &mut Writer<'_>, r: &Rect) -> Result<(), Error> {
+    w.put(&r.x.to_le_bytes())?;
+    w.put(&r.y.to_le_bytes())?;
+    w.put(&r.w.to_le_bytes())?;
+    w.put(&r.h.to_le_bytes())
+}
+
+/// Encodes one command into `buf`, returning the bytes written.
+///
+/// ```
+/// use tilerast::prelude::*;
+/// use tilerast::wire;
+/// let cmd = Command::Fill { rect: Rect::new(1, 2, 3, 4), color: Rgb::new(5, 6, 7), state: State::default() };
+/// let mut buf = [0u8; wire::MAX_ENCODED];
+/// let n = wire::encode(&cmd, &mut buf)?;
+/// assert_eq!(wire::decode(&buf[..n])?, (cmd, n));
+/// # Ok::<(), Error>(())
+/// ```
+pub fn encode(cmd: &Command, buf: &mut [u8]) -> Result<usize, Error> {
+    let mut w = Writer { buf, pos: 0 };
+    let head = |w: &mut Writer<'_>, tag: u8, st: &State| -> Result<(), Error> {
+        let masked = st.plane_mask != u32::MAX;
+        w.put(&[tag | if masked { MASK_FLAG } else { 0 }, st.wid])?;
+        if masked {
+            w.put(&st.plane_mask.to_le_bytes())?;
+        }
+        Ok(())
+    };
+    match cmd {
+        Command::Triangle { v, state } => {
+            let small = v.iter().all(|v| {
+                i16::try_from(v.x.to_bits()).is_ok() && i16::try_from(v.y.to_bits()).is_ok()
+            });
+            head(&mut w, if small { 2 } else { 1 }, state)?;
+            for v in v {
+                if small {
+                    w.put(&(v.x.to_bits() as i16).to_le_bytes())?;
+                    w.put(&(v.y.to_bits() as i16).to_le_bytes())?;
+                } else {
+                    w.put(&v.x.to_bits().to_le_bytes())?;
+                    w.put(&v.y.to_bits().to_le_bytes())?;
+                }
+                w.put(&v.z.to_le_bytes())?;
+                w.put(&[v.color.r, v.color.g, v.color.b])?;
+            }
+        }
+        Command::Span { span: s, state } => {
+            head(&mut w, 3, state)?;
+            w.put(&s.x.to_le_bytes())?;
+            w.put(&s.y.to_le_bytes())?;
+            w.put(&s.len.to_le_bytes())?;
+            for c in &s.color {
+                w.put(&c.to_bits().to_le_bytes())?;
+            }
+            for d in &s.dcolor {
+                w.put(&d.to_bits().to_le_bytes())?;
+            }
+            w.put(&s.z.to_bits().to_le_bytes())?;
+            w.put(&s.dz.to_bits().to_le_bytes())?;
+        }
+        Command::Fill { rect, color, state } => {
+            head(&mut w, 4, state)?;
+            rect_bytes(&mut w, rect)?;
+            w.put(&[color.r, color.g, color.b])?;
+        }
+        Command::ZFill { rect, z, state } => {
+            head(&mut w, 5, state)?;
+            rect_bytes(&mut w, rect)?;
+            w.put(&z.to_le_bytes())?;
+        }
+        Command::WidFill { rect, wid } => {
+            w.put(&[6, *wid])?;
+            rect_bytes(&mut w, rect)?;
+        }
+    }
+    Ok(w.pos)
+}
+
+/// Decodes and validates the command at the start of `buf`, returning it
+/// and the bytes it used. Truncated or unknown input is
+/// [`Error::Malformed`].
+pub fn decode(buf: &[u8]) -> Result<(Command, usize), Error> {
+    let mut r = Reader { buf, pos: 0 };
+    let tag = r.u8()?;
+    let wid = r.u8()?;
+    let plane_mask = if tag & MASK_FLAG != 0 {
+        r.u32()?
+    } else {
+        u32::MAX
+    };
+    let state = State { wid, plane_mask };
+    let cmd = match tag & !MASK_FLAG {
+        t @ (1 | 2) => {
+            let mut v = [Vertex::default(); 3];
+            for v in &mut v {
+                let (x, y) = if t == 2 {
+                    (r.i16()? as i32, r.i16()? as i32)
+                } else {
+                    (r.i32()?, r.i32()?)
+                };
+                *v = Vertex::new(Coord::from_bits(x), Coord::from_bits(y), r.u16()?, r.rgb()?);
+            }
+            Command::Triangle { v, state }
+        }
+        3 => {
+            let (x, y, len) = (r.i32()?, r.i32()?, r.u16()?);
+            let color = [r.u32()?, r.u32()?, r.u32()?].map(ColorFix::from_bits);
+            let dcolor = [r.i32()?, r.i32()?, r.i32()?].map(ColorStep::from_bits);
+            let (z, dz) = (ZFix::from_bits(r.u32()?), ZStep::from_bits(r.i32()?));
+            Command::Span {
+                span: SpanCmd {
+                    x,
+                    y,
+                    len,
+                    color,
+                    dcolor,
+                    z,
+                    dz,
+                },
+                state,
+            }
+        }
+        4 => Command::Fill {
+            rect: r.rect()?,
+            color: r.rgb()?,
+            state,
+        },
+        5 => Command::ZFill {
+            rect: r.rect()?,
+            z: r.u16()?,
+            state,
+        },
+        6 if tag & MASK_FLAG == 0 => Command::WidFill {
+            rect: r.rect()?,
+            wid,
+        },
+        _ => return Err(Error::Malformed),
+    };
+    cmd.validate()?;
+    Ok((cmd, r.pos))
+}
+
+/// Size of an encoded mesh vertex.
+const MESH_VERTEX: usize = 9;
+
+/// Encodes triangles sharing `state` as one indexed-mesh record:
+/// `vertices` (at most 65535, each coordinate within `i16` sub-pixel range)
+/// and `tris` indexing them. Returns the bytes written.
+///
+/// ```
+/// use tilerast::prelude::*;
+/// use tilerast::wire::{encode_mesh, Encoded};
+/// let v = |x: i32, y: i32| Vertex::new(Coord::from_num(x), Coord::from_num(y), 7, Rgb::new(1, 2, 3));
+/// let verts = [v(0, 0), v(10, 0), v(0, 10), v(10, 10)];
+/// let mut buf = [0u8; 64];
+/// let n = encode_mesh(&verts, &[[0, 1, 2], [1, 3, 2]], &State::default(), &mut buf)?;
+/// let cmds: Vec<Command> = Encoded(&buf[..n]).iter().collect::<Result<_, _>>()?;
+/// assert_eq!(cmds[1], Command::Triangle { v: [verts[1], verts[3], verts[2]], state: State::default() });
+/// # Ok::<(), Error>(())
+/// ```
+pub fn encode_mesh(
+    vertices: &[Vertex],
+    tris: &[[u16; 3]],
+    state: &State,
+    buf: &mut [u8],
+) -> Result<usize, Error> {
+    let nv = u16::try_from(vertices.len()).map_err(|_| Error::BufferTooSmall)?;
+    let nt = u16::try_from(tris.len()).map_err(|_| Error::BufferTooSmall)?;
+    let mut w = Writer { buf, pos: 0 };
+    let masked = state.plane_mask != u32::MAX;
+    w.put(&[7 | if masked { MASK_FLAG } else { 0 }, state.wid])?;
+    if masked {
+        w.put(&state.plane_mask.to_le_bytes())?;
+    }
+    w.put(&nv.to_le_bytes())?;
+    w.put(&nt.to_le_bytes())?;
+    for v in vertices {
+        let x = i16::try_from(v.x.to_bits()).map_err(|_| Error::CoordOutOfRange)?;
+        let y = i16::try_from(v.y.to_bits()).map_err(|_| Error::CoordOutOfRange)?;
+        w.put(&x.to_le_bytes())?;
+        w.put(&y.to_le_bytes())?;
+        w.put(&v.z.to_le_bytes())?;
+        w.put(&[v.color.r, v.color.g, v.color.b])?;
+    }
+    for t in tris {
+        if t.iter().any(|&i| i >= nv) {
+            return Err(Error::Malformed);
+        }
+        for i in t {
+            w.put(&i.to_le_bytes())?;
+        }
+    }
+    Ok(w.pos)
+}
+
+/// A mesh record being replayed.
+#[derive(Debug, Clone, Copy)]
+struct MeshCursor<'a> {
+    vertices: &'a [u8],
+    indices: &'a [u8],
+    state: State,
+}
+
+impl MeshCursor<'_> {
+    fn vertex(&self, i: u16) -> Result<Vertex, Error> {
+        let at = i as usize * MESH_VERTEX;
+        let mut r = Reader {
+            buf: self
+                .vertices
+                .get(at..at + MESH_VERTEX)
+                .ok_or(Error::Malformed)?,
+            pos: 0,
+        };
+        let (x, y) = (r.i16()? as i32, r.i16()? as i32);
+        Ok(Vertex::new(
+            Coord::from_bits(x),
+            Coord::from_bits(y),
+            r.u16()?,
+            r.rgb()?,
+        ))
+    }
+
+    /// The next triangle, or `None` when the record is done.
+    fn next(&mut self) -> Option<Result<Command, Error>> {
+        if self.indices.len() < 6 {
+            return None;
+        }
+        let mut r = Reader {
+            buf: self.indices,
+            pos: 0,
+        };
+        let tri = (|| -> Result<Command, Error> {
+            let v = [
+                self.vertex(r.u16()?)?,
+                self.vertex(r.u16()?)?,
+                self.vertex(r.u16()?)?,
+            ];
+            Ok(Command::Triangle {
+                v,
+                state: self.state,
+            })
+        })();
+        self.indices = &self.indices[6..];
+        Some(tri)
+    }
+}
+
+/// Reads a mesh record's header; returns the cursor and the record length.
+fn mesh_record(buf: &[u8]) -> Result<(MeshCursor<'_>, usize), Error> {
+    let mut r = Reader { buf, pos: 0 };
+    let tag = r.u8()?;
+    let wid = r.u8()?;
+    let plane_mask = if tag & MASK_FLAG != 0 {
+        r.u32()?
+    } else {
+        u32::MAX
+    };
+    let (nv, nt) = (r.u16()? as usize, r.u16()? as usize);
+    let vs = r.pos;
+    let is = vs + nv * MESH_VERTEX;
+    let end = is + nt * 6;
+    if end > buf.len() {
+        return Err(Error::Malformed);
+    }
+    let cursor = MeshCursor {
+        vertices: &buf[vs..is],
+        indices: &buf[is..end],
+        state: State { wid, plane_mask },
+    };
+    Ok((cursor, end))
+}
+
+/// An encoded display list (e.g. in flash), replayable as a
+/// [`CommandSource`](crate::frame::CommandSource).
+///
+/// ```
+/// use tilerast::prelude::*;
+/// use tilerast::wire::Encoded;
+/// let bytes = [6, 1, 0, 0, 0, 0, 0, 0, 0, 0, 4, 0, 0, 0, 4, 0, 0, 0]; // window 1 on 4x4 pixels
+/// let cmds: Result<Vec<Command>, Error> = Encoded(&bytes).iter().collect();
+/// assert_eq!(cmds?, [Command::WidFill { rect: Rect::new(0, 0, 4, 4), wid: 1 }]);
+/// # Ok::<(), Error>(())
+/// ```
+#[derive(Debug, Clone, Copy)]
+pub struct Encoded<'a>(pub &'a [u8]);
+
+impl<'a> Encoded<'a> {
+    /// The commands, decoded and validated one by one (a mesh record yields
+    /// its triangles). Decoding stops after the first error.
+    pub fn iter(&self) -> impl Iterator<Item = Result<Command, Error>> + 'a {
+        let mut rest = self.0;
+        let mut mesh: Option<MeshCursor<'a>> = None;
+        core::iter::from_fn(move || loop {
+            if let Some(m) = &mut mesh {
+                match m.next() {
+                    Some(Ok(cmd)) => return Some(cmd.validate().map(|()| cmd)),
+                    Some(Err(e)) => {
+                        rest = &[];
+                        mesh = None;
+                        return Some(Err(e));
+                    }
+                    None => mesh = None,
+                }
+            }
+            let first = *rest.first()?;
+            let step = if first & !MASK_FLAG == 7 {
+                mesh_record(rest).map(|(m, n)| {
+                    mesh = Some(m);
+                    (None, n)
+                })
+            } else {
+                decode(rest).map(|(cmd, n)| (Some(cmd), n))
+            };
+            match step {
+                Ok((cmd, n)) => {
+                    rest = &rest[n..];
+                    if let Some(cmd) = cmd {
+                        return Some(Ok(cmd));
+                    }
+                }
+                Err(e) => {
+                    rest = &[];
+                    return Some(Err(e));
+                }
+            }
+        })
+    }
+}
+
+/// Magic bytes of an encoded scene.
+pub const MAGIC: [u8; 4] = *b"TRS1";
+/// Bytes of an encoded [`SceneHeader`].
+pub const HEADER_LEN: usize = 32;
+
+/// What a scene needs, stored before its commands: screen, display format,
+/// dither, planes, clear values and the tile size it was made for. A
+/// firmware compiled for some tile types checks it with
+/// [`SceneHeader::check`] before rendering.
+///
+/// ```
+/// use tilerast::prelude::*;
+/// use tilerast::wire::{SceneHeader, HEADER_LEN};
+/// let h = SceneHeader::new::<Rgb565Format, Depth16, NoWid, Bayer4>(96, 64, (32, 16), Clear::default());
+/// let mut buf = [0u8; HEADER_LEN];
+/// h.encode(&mut buf)?;
+/// let (back, cmds) = SceneHeader::parse(&buf)?;
+/// assert_eq!(back, h);
+/// assert!(back.check::<Rgb565Format, Depth16, NoWid, Bayer4>().is_ok());
+/// assert_eq!(back.check::<Rgb565Format, NoDepth, NoWid, Bayer4>(), Err(Error::ConfigMismatch));
+/// # Ok::<(), Error>(())
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SceneHeader {
+    /// Screen width.
+    pub width: u16,
+    /// Screen height.
+    pub height: u16,
+    /// Tile size the scene was exported with (a firmware may use another).
+    pub tile: (u16, u16),
+    /// Display format name ([`PixelFormat::NAME`](crate::format::PixelFormat::NAME)), zero-padded.
+    pub format: [u8; 8],
+    /// `log2` of the dither matrix side.
+    pub dither_log2: u8,
+    /// Depth-plane bits (0 or 16).
+    pub depth_bits: u8,
+    /// Window-ID-plane bits (0 or 8).
+    pub wid_bits: u8,
+    /// Tile clear values.
+    pub clear: crate::frame::Clear,
+}
+
+impl SceneHeader {
+    /// The header for tile types `F`, `Z`, `W`, `D`.
+    pub fn new<F, Z, W, D>(
+        width: u16,
+        height: u16,
+        tile: (u16, u16),
+        clear: crate::frame::Clear,
+    ) -> Self
+    where
+        F: crate::format::PixelFormat,
+        Z: crate::fragment::DepthMode,
+        W: crate::fragment::WidMode,
+        D: crate::dither::Dither,
+    {
+        let mut format = [0u8; 8];
+        let n = F::NAME.len().min(8);
+        format[..n].copy_from_slice(&F::NAME.as_bytes()[..n]);
+        SceneHeader {
+            width,
+            height,
+            tile,
+            format,
+            dither_log2: D::LOG2 as u8,
+            depth_bits: Z::BITS as u8,
+            wid_bits: W::BITS as u8,
+            clear,
+        }
+    }
+
+    /// `Ok` when the scene was made for tile types `F`, `Z`, `W`, `D`.
+    pub fn check<F, Z, W, D>(&self) -> Result<(), Error>
+    where
+        F: crate::format::PixelFormat,
+        Z: crate::fragment::DepthMode,
+        W: crate::fragment::WidMode,
+        D: crate::dither::Dither,
+    {
+        let want = Self::new::<F, Z, W, D>(self.width, self.height, self.tile, self.clear);
+        if want == *self {
+            Ok(())
+        } else {
+            Err(Error::ConfigMismatch)
+        }
+    }
+
+    /// A frame for this screen in tiles of `tile` (use [`SceneHeader::tile`] or smaller).
+    pub fn frame(&self, tile: (u16, u16)) -> Result<crate::frame::Frame, Error> {
+        let mut f = crate::frame::Frame::new(self.width, self.height, tile.0, tile.1)?;
+        f.clear = self.clear;
+        Ok(f)
+    }
+
+    /// Writes the [`HEADER_LEN`] header bytes.
+    pub fn encode(&self, buf: &mut [u8]) -> Result<(), Error> {
+        let mut w = Writer { buf, pos: 0 };
+        w.put(&MAGIC)?;
+        for v in [self.width, self.height, self.tile.0, self.tile.1] {
+            w.put(&v.to_le_bytes())?;
+        }
+        w.put(&self.format)?;
+        w.put(&[self.dither_log2, self.depth_bits, self.wid_bits])?;
+        let c = &self.clear;
+        w.put(&[c.color.r, c.color.g, c.color.b])?;
+        w.put(&c.depth.to_le_bytes())?;
+        w.put(&[c.wid, 0, 0, 0])
+    }
+
+    /// Splits an encoded scene into its header and its commands.
+    pub fn parse(bytes: &[u8]) -> Result<(SceneHeader, Encoded<'_>), Error> {
+        let mut r = Reader { buf: bytes, pos: 0 };
+        if r.take::<4>()? != MAGIC {
+            return Err(Error::Malformed);
+        }
+        let (width, height, tw, th) = (r.u16()?, r.u16()?, r.u16()?, r.u16()?);
+        let format = r.take::<8>()?;
+        let [dither_log2, depth_bits, wid_bits] = r.take::<3>()?;
+        let color = r.rgb()?;
+        let depth = r.u16()?;
+        let [wid, _, _, _] = r.take::<4>()?;
+        let clear = crate::frame::Clear { color, depth, wid };
+        let h = SceneHeader {
+            width,
+            height,
+            tile: (tw, th),
+            format,
+            dither_log2,
+            depth_bits,
+            wid_bits,
+            clear,
+        };
+        Ok((h, Encoded(&bytes[HEADER_LEN..])))
+    }
+}

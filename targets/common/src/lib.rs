@@ -1,0 +1,109 @@
+//! # tilerast-fw
+//!
+//! The application side of tilerast firmware, shared by every board under
+//! `targets/` and by the host, so that the host can compute exactly what a
+//! board must output:
+//!
+//! - [`run_scene`]: replay an encoded scene (a [`wire`] header and its
+//!   commands, typically `include_bytes!` in flash) tile by tile, draw a text
+//!   label on each tile with `embedded-graphics` (the tile is a
+//!   `DrawTarget`), and flush each tile to any `DrawTarget` — measuring
+//!   raster and flush time with a caller-supplied clock.
+//! - [`workloads`]: the fixed workloads whose cost per pixel the boards
+//!   report (flat fill, Gouraud with and without Z, window ID and dither,
+//!   and `embedded-graphics`' own triangle fill for comparison).
+//! - [`rng`]: the deterministic PRNG those workloads (and the host tests)
+//!   use.
+//! - [`report`]: the lines a firmware prints (scene CRCs, workload ticks),
+//!   computable on the host too.
+//! - `board` (feature): the Cortex-M runtime side — SysTick clock,
+//!   semihosting output, stack high-water mark.
+#![no_std]
+#![deny(missing_docs)]
+#![cfg_attr(not(feature = "board"), forbid(unsafe_code))]
+
+#[cfg(feature = "board")]
+pub mod board;
+pub mod report;
+pub mod rng;
+pub mod workloads;
+
+use embedded_graphics::{
+    mono_font::{ascii::FONT_6X10, MonoTextStyle},
+    prelude::*,
+    text::{Baseline, Text},
+};
+use tilerast::prelude::*;
+use tilerast::wire::SceneHeader;
+
+/// A clock: each call returns the ticks elapsed since the previous call.
+/// Boards wrap SysTick; the host passes `|| 0`.
+pub trait Clock {
+    /// Ticks since the last call.
+    fn lap(&mut self) -> u32;
+}
+
+impl<F: FnMut() -> u32> Clock for F {
+    fn lap(&mut self) -> u32 {
+        self()
+    }
+}
+
+/// What rendering one scene did and cost.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct SceneRun {
+    /// Binning and replay counts.
+    pub stats: FrameStats,
+    /// Pixels on screen.
+    pub pixels: u32,
+    /// Ticks spent clearing tiles and rasterizing commands.
+    pub raster_ticks: u64,
+    /// Ticks spent drawing the label and flushing tiles.
+    pub flush_ticks: u64,
+}
+
+/// Error of [`run_scene`]: the raster core's, or the display's.
+pub type RunError<E> = FlushError<E>;
+
+/// Renders an encoded scene into tiles of `tile` size with `tile` buffer
+/// types `F, Z, W, D` (checked against the scene header), draws `label` (if
+/// any) at the top left of the screen on every tile, and flushes each tile to
+/// `target`.
+pub fn run_scene<const N: usize, F, Z, W, D, T>(
+    scene: &[u8],
+    tile_buf: &mut Tile<N, F, Z, W, D>,
+    tile: (u16, u16),
+    label: Option<&str>,
+    target: &mut T,
+    clock: &mut impl Clock,
+) -> Result<SceneRun, RunError<T::Error>>
+where
+    F: PixelFormat,
+    Z: DepthMode,
+    W: WidMode,
+    D: Dither,
+    T: DrawTarget,
+    T::Color: From<F::Color>,
+{
+    let (header, cmds) = SceneHeader::parse(scene)?;
+    header.check::<F, Z, W, D>()?;
+    let frame = header.frame(tile)?;
+    let white = F::to_color(F::pack_rgb(Rgb::new(255, 255, 255)));
+    let mut run = SceneRun {
+        pixels: header.width as u32 * header.height as u32,
+        ..SceneRun::default()
+    };
+    clock.lap();
+    let stats = frame.render_with(tile_buf, &cmds, |t| {
+        run.raster_ticks += clock.lap() as u64;
+        if let Some(text) = label {
+            let style = MonoTextStyle::new(&FONT_6X10, white);
+            let _ = Text::with_baseline(text, Point::new(6, 4), style, Baseline::Top).draw(t);
+        }
+        let r = t.flush(target);
+        run.flush_ticks += clock.lap() as u64;
+        r
+    })?;
+    run.stats = stats;
+    Ok(run)
+}

@@ -1,0 +1,158 @@
+//! The report a firmware prints, one `key value ...` line per measurement,
+//! parsed by the host (`tests/tests/firmware.rs`). The same functions run on
+//! the host with any clock, so the host computes the CRCs the boards must
+//! print.
+
+use crate::workloads::{self, FILL_CMDS, TRIANGLE_CMDS};
+use crate::{run_scene, Clock, SceneRun};
+use core::fmt::Write;
+use embedded_graphics::{pixelcolor::IntoStorage, prelude::Size};
+use tilerast::hash::CrcTarget;
+use tilerast::prelude::*;
+
+/// A scene the firmware knows: its tile types and its label.
+pub trait SceneKind {
+    /// Display format.
+    type F: PixelFormat;
+    /// Depth plane.
+    type Z: DepthMode;
+    /// Window-ID plane.
+    type W: WidMode;
+    /// Dither.
+    type D: Dither;
+    /// Name in the report (and of the exported `.bin`).
+    const NAME: &'static str;
+    /// Text drawn over every tile with `embedded-graphics`.
+    const LABEL: Option<&'static str>;
+}
+
+/// `scenes/demo.toml`: RGB444, Z, window IDs, 8x8 dither, labelled.
+pub struct Demo;
+impl SceneKind for Demo {
+    type F = Rgb444Format;
+    type Z = Depth16;
+    type W = Wid8;
+    type D = Bayer8;
+    const NAME: &'static str = "demo";
+    const LABEL: Option<&'static str> = Some("tilerast");
+}
+
+/// `scenes/ssd1306.toml`: 1 bit per pixel, Z, 4x4 dither.
+pub struct Ssd1306;
+impl SceneKind for Ssd1306 {
+    type F = BinaryFormat;
+    type Z = Depth16;
+    type W = NoWid;
+    type D = Bayer4;
+    const NAME: &'static str = "ssd1306";
+    const LABEL: Option<&'static str> = None;
+}
+
+/// Renders scene `K` in tiles of `tile` (at most `8 N` pixels) into a
+/// [`CrcTarget`]: the CRC of the pixel stream and the run's costs.
+pub fn scene_crc<K: SceneKind, const N: usize>(
+    scene: &[u8],
+    tile: (u16, u16),
+    clock: &mut impl Clock,
+) -> Result<(u32, SceneRun), Error>
+where
+    <K::F as PixelFormat>::Color: IntoStorage,
+    <<K::F as PixelFormat>::Color as IntoStorage>::Storage: Into<u32>,
+{
+    let (h, _) = tilerast::wire::SceneHeader::parse(scene)?;
+    let mut target =
+        CrcTarget::<<K::F as PixelFormat>::Color>::new(Size::new(h.width as u32, h.height as u32));
+    let mut buf: Tile<N, K::F, K::Z, K::W, K::D> = Tile::new();
+    let run =
+        run_scene(scene, &mut buf, tile, K::LABEL, &mut target, clock).map_err(|e| match e {
+            FlushError::Raster(e) => e,
+            FlushError::Target(never) => match never {},
+        })?;
+    Ok((target.crc(), run))
+}
+
+/// Prints `scene NAME tile WxH crc 0x... pixels P raster_ticks R flush_ticks F replayed C`.
+pub fn report_scene<K: SceneKind, const N: usize>(
+    scene: &[u8],
+    tile: (u16, u16),
+    out: &mut impl Write,
+    clock: &mut impl Clock,
+) -> core::fmt::Result
+where
+    <K::F as PixelFormat>::Color: IntoStorage,
+    <<K::F as PixelFormat>::Color as IntoStorage>::Storage: Into<u32>,
+{
+    match scene_crc::<K, N>(scene, tile, clock) {
+        Ok((crc, r)) => writeln!(
+            out,
+            "scene {} tile {}x{} crc 0x{crc:08x} pixels {} raster_ticks {} flush_ticks {} replayed {}",
+            K::NAME, tile.0, tile.1, r.pixels, r.raster_ticks, r.flush_ticks, r.stats.replayed
+        ),
+        Err(e) => writeln!(out, "scene {} error {e}", K::NAME),
+    }
+}
+
+#[inline(never)]
+fn bench_one<F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither>(
+    name: &str,
+    cmds: &[Command],
+    eg: bool,
+    out: &mut impl Write,
+    clock: &mut impl Clock,
+) -> core::fmt::Result {
+    let mut tile: Tile<{ (workloads::SIDE * workloads::SIDE / 8) as usize }, F, Z, W, D> =
+        Tile::new();
+    let ticks = if eg {
+        workloads::eg_triangles(&mut tile, cmds, clock)
+    } else {
+        workloads::draw(&mut tile, cmds, clock)
+    };
+    match ticks {
+        Ok(t) => writeln!(out, "bench {name} ticks {t}"),
+        Err(e) => writeln!(out, "bench {name} error {e}"),
+    }
+}
+
+/// Prints `bench NAME ticks T` for each workload: flat fill; Gouraud
+/// alone, with Z, with Z and window ID, and with those and 8x8 dither (all
+/// RGB565); and the same triangles through `embedded-graphics`' `Triangle`
+/// fill.
+pub fn report_benches(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt::Result {
+    bench_one::<Rgb565Format, NoDepth, NoWid, NoDither>(
+        "fill_rgb565",
+        &FILL_CMDS,
+        false,
+        out,
+        clock,
+    )?;
+    let tris = &TRIANGLE_CMDS;
+    bench_one::<Rgb565Format, NoDepth, NoWid, NoDither>("gouraud_rgb565", tris, false, out, clock)?;
+    bench_one::<Rgb565Format, Depth16, NoWid, NoDither>(
+        "gouraud_z_rgb565",
+        tris,
+        false,
+        out,
+        clock,
+    )?;
+    bench_one::<Rgb565Format, Depth16, Wid8, NoDither>(
+        "gouraud_z_wid_rgb565",
+        tris,
+        false,
+        out,
+        clock,
+    )?;
+    bench_one::<Rgb565Format, Depth16, Wid8, Bayer8>(
+        "gouraud_z_wid_dither8_rgb565",
+        tris,
+        false,
+        out,
+        clock,
+    )?;
+    bench_one::<Rgb565Format, NoDepth, NoWid, NoDither>(
+        "eg_triangle_rgb565",
+        tris,
+        true,
+        out,
+        clock,
+    )
+}

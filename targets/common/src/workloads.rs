@@ -1,0 +1,170 @@
+//! The workloads whose cost the boards report, identical on every target
+//! (the commands come from a fixed-seed [`Rng`], at compile time: they live
+//! in flash and cost no RAM). Each renders into one [`SIDE`] x [`SIDE`] tile.
+//!
+//! Pixel counts are a property of the workload, not of the chip: the host
+//! computes them once ([`covered_pixels`]) and divides the boards' counts.
+
+use crate::rng::Rng;
+use crate::Clock;
+use embedded_graphics::{
+    prelude::*,
+    primitives::{PrimitiveStyle, Triangle},
+};
+use tilerast::prelude::*;
+
+/// Tile side of every workload (1024 pixels: fits the Cortex-M0's 16 KB).
+pub const SIDE: u32 = 32;
+/// Triangles per workload.
+pub const TRIANGLES: usize = 64;
+/// Full-tile fills per workload.
+pub const FILLS: usize = 8;
+
+/// Small Gouraud triangles (about 12 px across) with random depth and
+/// colours, scattered over the tile.
+pub static TRIANGLE_CMDS: [Command; TRIANGLES] = triangles();
+/// Full-tile flat fills.
+pub static FILL_CMDS: [Command; FILLS] = fills();
+
+const fn triangles() -> [Command; TRIANGLES] {
+    let mut rng = Rng::new(0x7173_7261_7374_6c69);
+    let side = SIDE as i64 * 16;
+    let mut out = [Command::WidFill {
+        rect: Rect::new(0, 0, 0, 0),
+        wid: 0,
+    }; TRIANGLES];
+    let mut i = 0;
+    while i < TRIANGLES {
+        let cx = rng.range(0, side);
+        let cy = rng.range(0, side);
+        let v = rng.triangle((cx - 100, cx + 100), (cy - 100, cy + 100));
+        out[i] = Command::Triangle {
+            v,
+            state: State::new(0),
+        };
+        i += 1;
+    }
+    out
+}
+
+const fn fills() -> [Command; FILLS] {
+    let mut out = [Command::WidFill {
+        rect: Rect::new(0, 0, 0, 0),
+        wid: 0,
+    }; FILLS];
+    let mut i = 0;
+    while i < FILLS {
+        let k = i as u8;
+        let color = Rgb::new(k * 30, 90, 200 - k * 20);
+        out[i] = Command::Fill {
+            rect: Rect::new(0, 0, SIDE, SIDE),
+            color,
+            state: State::new(0),
+        };
+        i += 1;
+    }
+    out
+}
+
+/// Ticks to clear the tile and draw `cmds` into it.
+pub fn draw<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither>(
+    tile: &mut Tile<N, F, Z, W, D>,
+    cmds: &[Command],
+    clock: &mut impl Clock,
+) -> Result<u64, Error> {
+    tile.begin(Rect::new(0, 0, SIDE, SIDE), &Clear::default())?;
+    clock.lap();
+    for c in cmds {
+        tile.draw(c)?;
+    }
+    Ok(clock.lap() as u64)
+}
+
+/// Ticks to fill the same triangles, flat-coloured (first vertex's colour,
+/// vertices rounded to whole pixels), with `embedded-graphics`' own
+/// `Triangle` drawn onto the tile as a `DrawTarget`.
+pub fn eg_triangles<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither>(
+    tile: &mut Tile<N, F, Z, W, D>,
+    cmds: &[Command],
+    clock: &mut impl Clock,
+) -> Result<u64, Error> {
+    tile.begin(Rect::new(0, 0, SIDE, SIDE), &Clear::default())?;
+    let px = |c: Coord| c.round().to_num::<i32>();
+    clock.lap();
+    for c in cmds {
+        if let Command::Triangle { v, .. } = c {
+            let color = F::to_color(F::pack_rgb(v[0].color));
+            let [a, b, d] = v.map(|v| Point::new(px(v.x), px(v.y)));
+            let _ = Triangle::new(a, b, d)
+                .into_styled(PrimitiveStyle::with_fill(color))
+                .draw(tile);
+        }
+    }
+    Ok(clock.lap() as u64)
+}
+
+/// Pixels the commands cover, summed over commands (overdraw included):
+/// each is drawn alone, white on black, into an RGB888 tile and counted.
+pub fn covered_pixels(cmds: &[Command]) -> Result<u64, Error> {
+    let mut tile: Tile<128, Rgb888Format> = Tile::new();
+    let mut n = 0;
+    for c in cmds {
+        let white = match *c {
+            Command::Triangle { v, state } => Command::Triangle {
+                v: v.map(|v| Vertex {
+                    color: Rgb::new(255, 255, 255),
+                    ..v
+                }),
+                state,
+            },
+            Command::Fill { rect, state, .. } => Command::Fill {
+                rect,
+                color: Rgb::new(255, 255, 255),
+                state,
+            },
+            other => other,
+        };
+        tile.begin(Rect::new(0, 0, SIDE, SIDE), &Clear::default())?;
+        tile.draw(&white)?;
+        n += (0..SIDE as i32 * SIDE as i32)
+            .filter(|i| tile.raw(i % SIDE as i32, i / SIDE as i32) != Some(0))
+            .count() as u64;
+    }
+    Ok(n)
+}
+
+/// Counts the pixels drawn into it (within [`SIDE`] x [`SIDE`]).
+struct Counter(u64);
+
+impl OriginDimensions for Counter {
+    fn size(&self) -> Size {
+        Size::new(SIDE, SIDE)
+    }
+}
+
+impl DrawTarget for Counter {
+    type Color = embedded_graphics::pixelcolor::Rgb565;
+    type Error = core::convert::Infallible;
+    fn draw_iter<I: IntoIterator<Item = Pixel<Self::Color>>>(
+        &mut self,
+        pixels: I,
+    ) -> Result<(), Self::Error> {
+        let b = self.bounding_box();
+        self.0 += pixels.into_iter().filter(|p| b.contains(p.0)).count() as u64;
+        Ok(())
+    }
+}
+
+/// Pixels `embedded-graphics` fills for the triangles in [`eg_triangles`].
+pub fn eg_covered_pixels(cmds: &[Command]) -> u64 {
+    let mut c = Counter(0);
+    let px = |c: Coord| c.round().to_num::<i32>();
+    for cmd in cmds {
+        if let Command::Triangle { v, .. } = cmd {
+            let [a, b, d] = v.map(|v| Point::new(px(v.x), px(v.y)));
+            let style = PrimitiveStyle::with_fill(embedded_graphics::pixelcolor::Rgb565::WHITE);
+            let _ = Triangle::new(a, b, d).into_styled(style).draw(&mut c);
+        }
+    }
+    c.0
+}

@@ -1,0 +1,26 @@
+//! tilerast on the BBC micro:bit v1 (nRF51822: Cortex-M0 at 16 MHz, 16 KB of
+//! RAM) under QEMU: the same report as the Cortex-M4 firmware. The demo's
+//! exported 64x32 tile (40 bits per pixel: 10 KB) leaves too little of 16 KB
+//! for the stack, so this board renders it in 32x32 tiles (5 KB) — the
+//! output is the same, since tiling does not change pixels.
+//!
+//! Build and run (after exporting the scenes, see `targets/README.md`):
+//! `TILERAST_SCENES=/abs/path cargo run --release`.
+#![no_std]
+#![no_main]
+
+use panic_semihosting as _;
+use tilerast_fw::board::{run, Board};
+
+const DEMO_TILE: (u16, u16) = (32, 32);
+const SSD_TILE: (u16, u16) = (128, 16);
+
+#[cortex_m_rt::entry]
+fn main() -> ! {
+    let board = Board {
+        name: "microbit",
+        cpu: "cortex-m0",
+        instr_per_tick: "62.5",
+    };
+    run::<{ 32 * 32 / 8 }, { 128 * 16 / 8 }>(&board, DEMO_TILE, SSD_TILE)
+}

@@ -1,0 +1,25 @@
+//! tilerast on the Arm MPS2 AN386 (Cortex-M4F, 25 MHz) under QEMU: renders
+//! the exported scenes tile by tile into a CRC32 `DrawTarget`, runs the
+//! measured workloads, and reports over semihosting.
+//!
+//! Build and run (after exporting the scenes, see `targets/README.md`):
+//! `TILERAST_SCENES=/abs/path cargo run --release`.
+#![no_std]
+#![no_main]
+
+use panic_semihosting as _;
+use tilerast_fw::board::{run, Board};
+
+/// The demo in its exported 64x32 tiles, the SSD1306 scene in 128x16.
+const DEMO_TILE: (u16, u16) = (64, 32);
+const SSD_TILE: (u16, u16) = (128, 16);
+
+#[cortex_m_rt::entry]
+fn main() -> ! {
+    let board = Board {
+        name: "mps2-an386",
+        cpu: "cortex-m4f",
+        instr_per_tick: "40",
+    };
+    run::<{ 64 * 32 / 8 }, { 128 * 16 / 8 }>(&board, DEMO_TILE, SSD_TILE)
+}
