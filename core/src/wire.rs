@@ -40,6 +40,16 @@ struct Writer<'a> {
 }
 
 impl Writer<'_> {
+    /// A command's tag byte and state; the plane mask only when partial.
+    fn head(&mut self, tag: u8, st: &State) -> Result<(), Error> {
+        let masked = st.plane_mask != u32::MAX;
+        self.put(&[tag | if masked { MASK_FLAG } else { 0 }, st.wid])?;
+        if masked {
+            self.put(&st.plane_mask.to_le_bytes())?;
+        }
+        Ok(())
+    }
+
     fn put(&mut self, bytes: &[u8]) -> Result<(), Error> {
         let end = self.pos + bytes.len();
         self.buf
@@ -85,6 +95,17 @@ impl Reader<'_> {
         let [r, g, b] = self.take()?;
         Ok(Rgb::new(r, g, b))
     }
+    /// A command's tag byte and state (window ID, optional plane mask).
+    fn head(&mut self) -> Result<(u8, State), Error> {
+        let tag = self.u8()?;
+        let wid = self.u8()?;
+        let plane_mask = if tag & MASK_FLAG != 0 {
+            self.u32()?
+        } else {
+            u32::MAX
+        };
+        Ok((tag, State { wid, plane_mask }))
+    }
     fn rect(&mut self) -> Result<Rect, Error> {
         Ok(Rect::new(
             self.i32()?,
@@ -115,20 +136,12 @@ fn rect_bytes(w: &mut Writer<'_>, r: &Rect) -> Result<(), Error> {
 /// ```
 pub fn encode(cmd: &Command, buf: &mut [u8]) -> Result<usize, Error> {
     let mut w = Writer { buf, pos: 0 };
-    let head = |w: &mut Writer<'_>, tag: u8, st: &State| -> Result<(), Error> {
-        let masked = st.plane_mask != u32::MAX;
-        w.put(&[tag | if masked { MASK_FLAG } else { 0 }, st.wid])?;
-        if masked {
-            w.put(&st.plane_mask.to_le_bytes())?;
-        }
-        Ok(())
-    };
     match cmd {
         Command::Triangle { v, state } => {
             let small = v.iter().all(|v| {
                 i16::try_from(v.x.to_bits()).is_ok() && i16::try_from(v.y.to_bits()).is_ok()
             });
-            head(&mut w, if small { 2 } else { 1 }, state)?;
+            w.head(if small { 2 } else { 1 }, state)?;
             for v in v {
                 if small {
                     w.put(&(v.x.to_bits() as i16).to_le_bytes())?;
@@ -142,7 +155,7 @@ pub fn encode(cmd: &Command, buf: &mut [u8]) -> Result<usize, Error> {
             }
         }
         Command::Span { span: s, state } => {
-            head(&mut w, 3, state)?;
+            w.head(3, state)?;
             w.put(&s.x.to_le_bytes())?;
             w.put(&s.y.to_le_bytes())?;
             w.put(&s.len.to_le_bytes())?;
@@ -156,12 +169,12 @@ pub fn encode(cmd: &Command, buf: &mut [u8]) -> Result<usize, Error> {
             w.put(&s.dz.to_bits().to_le_bytes())?;
         }
         Command::Fill { rect, color, state } => {
-            head(&mut w, 4, state)?;
+            w.head(4, state)?;
             rect_bytes(&mut w, rect)?;
             w.put(&[color.r, color.g, color.b])?;
         }
         Command::ZFill { rect, z, state } => {
-            head(&mut w, 5, state)?;
+            w.head(5, state)?;
             rect_bytes(&mut w, rect)?;
             w.put(&z.to_le_bytes())?;
         }
@@ -178,14 +191,7 @@ pub fn encode(cmd: &Command, buf: &mut [u8]) -> Result<usize, Error> {
 /// [`Error::Malformed`].
 pub fn decode(buf: &[u8]) -> Result<(Command, usize), Error> {
     let mut r = Reader { buf, pos: 0 };
-    let tag = r.u8()?;
-    let wid = r.u8()?;
-    let plane_mask = if tag & MASK_FLAG != 0 {
-        r.u32()?
-    } else {
-        u32::MAX
-    };
-    let state = State { wid, plane_mask };
+    let (tag, state) = r.head()?;
     let cmd = match tag & !MASK_FLAG {
         t @ (1 | 2) => {
             let mut v = [Vertex::default(); 3];
@@ -229,7 +235,7 @@ pub fn decode(buf: &[u8]) -> Result<(Command, usize), Error> {
         },
         6 if tag & MASK_FLAG == 0 => Command::WidFill {
             rect: r.rect()?,
-            wid,
+            wid: state.wid,
         },
         _ => return Err(Error::Malformed),
     };
@@ -264,11 +270,7 @@ pub fn encode_mesh(
     let nv = u16::try_from(vertices.len()).map_err(|_| Error::BufferTooSmall)?;
     let nt = u16::try_from(tris.len()).map_err(|_| Error::BufferTooSmall)?;
     let mut w = Writer { buf, pos: 0 };
-    let masked = state.plane_mask != u32::MAX;
-    w.put(&[7 | if masked { MASK_FLAG } else { 0 }, state.wid])?;
-    if masked {
-        w.put(&state.plane_mask.to_le_bytes())?;
-    }
+    w.head(7, state)?;
     w.put(&nv.to_le_bytes())?;
     w.put(&nt.to_le_bytes())?;
     for v in vertices {
@@ -345,13 +347,7 @@ impl MeshCursor<'_> {
 /// Reads a mesh record's header; returns the cursor and the record length.
 fn mesh_record(buf: &[u8]) -> Result<(MeshCursor<'_>, usize), Error> {
     let mut r = Reader { buf, pos: 0 };
-    let tag = r.u8()?;
-    let wid = r.u8()?;
-    let plane_mask = if tag & MASK_FLAG != 0 {
-        r.u32()?
-    } else {
-        u32::MAX
-    };
+    let (_, state) = r.head()?;
     let (nv, nt) = (r.u16()? as usize, r.u16()? as usize);
     let vs = r.pos;
     let is = vs + nv * MESH_VERTEX;
@@ -362,7 +358,7 @@ fn mesh_record(buf: &[u8]) -> Result<(MeshCursor<'_>, usize), Error> {
     let cursor = MeshCursor {
         vertices: &buf[vs..is],
         indices: &buf[is..end],
-        state: State { wid, plane_mask },
+        state,
     };
     Ok((cursor, end))
 }

@@ -37,32 +37,6 @@ fn triangles() -> Vec<Command> {
         .collect()
 }
 
-/// Pixels the triangles cover, summed (counted with a plain tile).
-fn covered(cmds: &[Command]) -> u64 {
-    let mut tile: Box<Base<Rgb888Format, NoDepth, NoWid, NoDither>> = Box::default();
-    let area = Rect::new(0, 0, T, T);
-    let mut n = 0;
-    for c in cmds {
-        tile.begin(area, &Clear::default()).unwrap();
-        let white = match *c {
-            Command::Triangle { v, state } => Command::Triangle {
-                v: v.map(|v| Vertex {
-                    color: Rgb::new(255, 255, 255),
-                    ..v
-                }),
-                state,
-            },
-            other => other,
-        };
-        tile.draw(&white).unwrap();
-        n += (0..T as i32)
-            .flat_map(|y| (0..T as i32).map(move |x| (x, y)))
-            .filter(|&(x, y)| tile.raw(x, y) != Some(0))
-            .count() as u64;
-    }
-    n
-}
-
 fn bench_tile<F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither>(
     c: &mut Criterion,
     group: &str,
@@ -88,7 +62,7 @@ fn bench_tile<F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither>(
 
 fn raster(c: &mut Criterion) {
     let tris = triangles();
-    let px = covered(&tris);
+    let px = tilerast_fw::workloads::covered_pixels(&tris, T).expect("64x64 fits");
     macro_rules! tri {
         ($($f:ty, $z:ty, $w:ty, $d:ty, $name:literal;)*) => {
             $(bench_tile::<$f, $z, $w, $d>(c, "triangles", $name, &tris, px);)*

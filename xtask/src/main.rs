@@ -18,16 +18,7 @@ use std::process::{Command, ExitCode};
 const THUMB_TARGETS: [&str; 2] = ["thumbv6m-none-eabi", "thumbv7em-none-eabihf"];
 
 fn run(program: &str, args: &[&str]) -> Result<(), String> {
-    eprintln!("xtask: {program} {}", args.join(" "));
-    let status = Command::new(program)
-        .args(args)
-        .status()
-        .map_err(|e| format!("cannot run {program}: {e}"))?;
-    if status.success() {
-        Ok(())
-    } else {
-        Err(format!("`{program} {}` failed ({status})", args.join(" ")))
-    }
+    run_in(".", program, args)
 }
 
 /// Runs `cargo test`, streaming its output, and returns the totals of its
@@ -73,7 +64,13 @@ fn cargo_test(args: &[&str]) -> Result<(u64, u64), String> {
 
 /// [`run`] in another directory (a firmware workspace).
 fn run_in(dir: &str, program: &str, args: &[&str]) -> Result<(), String> {
-    eprintln!("xtask: (in {dir}) {program} {}", args.join(" "));
+    let shown = format!("{program} {}", args.join(" "));
+    let place = if dir == "." {
+        String::new()
+    } else {
+        format!("(in {dir}) ")
+    };
+    eprintln!("xtask: {place}{shown}");
     let status = Command::new(program)
         .current_dir(dir)
         .args(args)
@@ -82,10 +79,7 @@ fn run_in(dir: &str, program: &str, args: &[&str]) -> Result<(), String> {
     if status.success() {
         Ok(())
     } else {
-        Err(format!(
-            "`{program} {}` in {dir} failed ({status})",
-            args.join(" ")
-        ))
+        Err(format!("`{shown}` {place}failed ({status})"))
     }
 }
 

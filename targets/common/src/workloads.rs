@@ -103,10 +103,12 @@ pub fn eg_triangles<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D:
     Ok(clock.lap() as u64)
 }
 
-/// Pixels the commands cover, summed over commands (overdraw included):
-/// each is drawn alone, white on black, into an RGB888 tile and counted.
-pub fn covered_pixels(cmds: &[Command]) -> Result<u64, Error> {
-    let mut tile: Tile<128, Rgb888Format> = Tile::new();
+/// Pixels the commands cover inside the `side` x `side` square at the
+/// origin (at most 64), summed over commands (overdraw included): each is
+/// drawn alone, white on black, into an RGB888 tile and counted.
+pub fn covered_pixels(cmds: &[Command], side: u32) -> Result<u64, Error> {
+    let mut tile: Tile<512, Rgb888Format> = Tile::new();
+    let area = Rect::new(0, 0, side, side);
     let mut n = 0;
     for c in cmds {
         let white = match *c {
@@ -124,10 +126,11 @@ pub fn covered_pixels(cmds: &[Command]) -> Result<u64, Error> {
             },
             other => other,
         };
-        tile.begin(Rect::new(0, 0, SIDE, SIDE), &Clear::default())?;
+        tile.begin(area, &Clear::default())?;
         tile.draw(&white)?;
-        n += (0..SIDE as i32 * SIDE as i32)
-            .filter(|i| tile.raw(i % SIDE as i32, i / SIDE as i32) != Some(0))
+        let s = side as i32;
+        n += (0..s * s)
+            .filter(|i| tile.raw(i % s, i / s) != Some(0))
             .count() as u64;
     }
     Ok(n)
