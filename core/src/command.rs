@@ -187,6 +187,13 @@ pub enum Command {
         /// Window ID and plane mask.
         state: State,
     },
+    /// A styled line (end point excluded), Z-tested like every command.
+    Line {
+        /// The line.
+        line: crate::line::LineCmd,
+        /// Window ID and plane mask.
+        state: State,
+    },
     /// Area fill with a flat colour: window-ID test and plane mask, no Z, no dither.
     Fill {
         /// Pixels to fill (clipped to the screen).
@@ -220,6 +227,7 @@ impl Command {
         match self {
             Command::Triangle { v, .. } => v.iter().try_for_each(Vertex::validate),
             Command::Span { span, .. } => span.validate(),
+            Command::Line { line, .. } => line.validate(),
             _ => Ok(()),
         }
     }
@@ -232,6 +240,7 @@ impl Command {
                 Some(Rect::new(span.x, span.y, span.len as u32, 1))
             }
             Command::Span { .. } => None,
+            Command::Line { line, .. } => line.bounds(),
             Command::Fill { rect, .. }
             | Command::ZFill { rect, .. }
             | Command::WidFill { rect, .. } => (rect.w > 0 && rect.h > 0).then_some(*rect),

@@ -11,11 +11,12 @@
 //!
 //! | stage | module | what it does |
 //! | --- | --- | --- |
-//! | commands | [`command`], [`list`] | the display list: spans, triangles, fills |
+//! | commands | [`command`], [`list`] | the display list: spans, triangles, lines, fills |
 //! | setup | [`setup`] | vertices to exact integer edge functions and attribute planes |
 //! | bin | [`frame`] | each tile replays only the commands whose bounds touch it |
 //! | traverse | [`traverse`] | exact per-row coverage with the top-left fill rule |
 //! | span | [`span`] | the one span DDA every command type uses |
+//! | vector | [`line`] | Bresenham lines with sub-pixel endpoints and styles |
 //! | fragment tests | [`fragment`] | window ID, then Z (less-than, read-modify-write) |
 //! | dither / pack | [`dither`], [`format`] | address-bit ordered dither, display formats |
 //! | tile planes | [`tile`] | colour, depth and window-ID planes chosen by type |
@@ -75,6 +76,7 @@ pub mod fragment;
 pub mod frame;
 pub mod geom;
 pub mod hash;
+pub mod line;
 pub mod list;
 pub mod numeric;
 pub mod setup;
@@ -101,6 +103,7 @@ pub mod prelude {
     pub use crate::fragment::{Depth16, DepthMode, NoDepth, NoWid, Wid8, WidMode};
     pub use crate::frame::{Clear, CommandSource, Frame, FrameStats};
     pub use crate::geom::Rect;
+    pub use crate::line::{LineCmd, LineStyle};
     pub use crate::list::DisplayList;
     pub use crate::numeric::{ColorFix, ColorStep, Coord, ZFix, ZStep};
     pub use crate::tile::Tile;

@@ -9,7 +9,7 @@
 use crate::command::{Command, State};
 use crate::dither::{Dither, NoDither};
 use crate::error::Error;
-use crate::format::{ColorPlane, PixelFormat, Rgb};
+use crate::format::{ColorPlane, Lanes, PixelFormat, Rgb};
 use crate::fragment::{DepthMode, DepthPlane, NoDepth, NoWid, WidMode, WidPlane};
 use crate::frame::Clear;
 use crate::geom::Rect;
@@ -133,6 +133,7 @@ impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Tile<N
                 }
             }
             Command::Span { span, state } => self.span_cmd(span, state),
+            Command::Line { line, state } => self.line(line, state),
             Command::Fill { rect, color, state } => self.fill(rect, *color, state),
             Command::ZFill { rect, z, state } => {
                 let wid = state.wid;
@@ -161,6 +162,31 @@ impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Tile<N
             }
             .advanced(x0 - xr);
             self.span(x0, py, x1 - x0, start, st);
+        });
+    }
+
+    fn line(&mut self, l: &crate::line::LineCmd, st: &State) {
+        let Some(s) = l.setup() else { return };
+        let a = self.area;
+        let (lo, hi, mlo, mhi) = if s.y_major {
+            (a.y as i64, a.y1(), a.x as i64, a.x1())
+        } else {
+            (a.x as i64, a.x1(), a.y as i64, a.y1())
+        };
+        let c = l.color;
+        let c = F::lanes_from_rgb(
+            [c.r as i64, c.g as i64, c.b as i64].map(|v| v << crate::numeric::COLOR_FRAC),
+        );
+        let dc = c.map(|_| 0);
+        s.walk(lo, hi, |k, major, minor, z| {
+            if (mlo..mhi).contains(&minor) && l.style.on(k) {
+                let (x, y) = if s.y_major {
+                    (minor, major)
+                } else {
+                    (major, minor)
+                };
+                self.span(x, y, 1, SpanStart { c, dc, z, dz: 0 }, st);
+            }
         });
     }
 

@@ -15,8 +15,8 @@ use crate::setup::Edge;
 
 /// `floor(num / den)` as `num` grows by `step` each row (`den > 0`).
 #[derive(Debug, Clone, Copy)]
-struct FloorWalk {
-    q: i64,
+pub(crate) struct FloorWalk {
+    pub(crate) q: i64,
     r: i64,
     den: i64,
     sq: i64,
@@ -24,7 +24,7 @@ struct FloorWalk {
 }
 
 impl FloorWalk {
-    fn new(num: i64, den: i64, step: i64) -> Self {
+    pub(crate) fn new(num: i64, den: i64, step: i64) -> Self {
         let q = div_floor(num, den);
         let sq = div_floor(step, den);
         FloorWalk {
@@ -37,7 +37,7 @@ impl FloorWalk {
     }
 
     #[inline]
-    fn next(&mut self) {
+    pub(crate) fn next(&mut self) {
         self.q += self.sq;
         self.r += self.sr;
         if self.r >= self.den {

@@ -14,6 +14,7 @@
 //! | 4 | fill | `x: i32, y: i32, w: u32, h: u32, r, g, b` |
 //! | 5 | Z fill | `x: i32, y: i32, w: u32, h: u32, z: u16` |
 //! | 6 | window-ID fill | `x: i32, y: i32, w: u32, h: u32` (its `wid` is the ID; no mask) |
+//! | 8 | line | `x0, y0, x1, y1: i32, z0, z1: u16, r, g, b, pattern: u16, scale: u8, phase: u16` |
 //! | 7 | indexed mesh: triangles sharing vertices | `nv: u16, nt: u16`, `nv` x (`x: i16, y: i16, z: u16, r, g, b`), `nt` x 3 x `u16` index |
 //!
 //! A mesh record replays as its `nt` triangles, in order, each with the
@@ -26,6 +27,7 @@ use crate::command::{Command, SpanCmd, State, Vertex};
 use crate::error::Error;
 use crate::format::Rgb;
 use crate::geom::Rect;
+use crate::line::{LineCmd, LineStyle};
 use crate::numeric::{ColorFix, ColorStep, Coord, ZFix, ZStep};
 
 const MASK_FLAG: u8 = 0x80;
@@ -168,6 +170,18 @@ pub fn encode(cmd: &Command, buf: &mut [u8]) -> Result<usize, Error> {
             w.put(&s.z.to_bits().to_le_bytes())?;
             w.put(&s.dz.to_bits().to_le_bytes())?;
         }
+        Command::Line { line: l, state } => {
+            w.head(8, state)?;
+            for c in [l.p0.0, l.p0.1, l.p1.0, l.p1.1] {
+                w.put(&c.to_bits().to_le_bytes())?;
+            }
+            w.put(&l.z[0].to_le_bytes())?;
+            w.put(&l.z[1].to_le_bytes())?;
+            w.put(&[l.color.r, l.color.g, l.color.b])?;
+            w.put(&l.style.pattern.to_le_bytes())?;
+            w.put(&[l.style.scale])?;
+            w.put(&l.style.phase.to_le_bytes())?;
+        }
         Command::Fill { rect, color, state } => {
             w.head(4, state)?;
             rect_bytes(&mut w, rect)?;
@@ -219,6 +233,27 @@ pub fn decode(buf: &[u8]) -> Result<(Command, usize), Error> {
                     dcolor,
                     z,
                     dz,
+                },
+                state,
+            }
+        }
+        8 => {
+            let mut c = || r.i32().map(Coord::from_bits);
+            let (p0, p1) = ((c()?, c()?), (c()?, c()?));
+            let z = [r.u16()?, r.u16()?];
+            let color = r.rgb()?;
+            let style = LineStyle {
+                pattern: r.u16()?,
+                scale: r.u8()?,
+                phase: r.u16()?,
+            };
+            Command::Line {
+                line: LineCmd {
+                    p0,
+                    p1,
+                    z,
+                    color,
+                    style,
                 },
                 state,
             }

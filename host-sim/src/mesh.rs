@@ -45,6 +45,23 @@ pub struct MeshSpec {
     pub ambient: f64,
     /// Colour for every group, overriding the `.mtl` diffuse colours.
     pub color: Option<[u8; 3]>,
+    /// Draw the shaded faces (default true).
+    #[serde(default = "default_true")]
+    pub faces: bool,
+    /// Also draw every edge once as a Bresenham line in this colour. Edges
+    /// are Z-tested with `wire_bias` pulled towards the viewer, so they show
+    /// on their own faces and hide behind others.
+    pub wireframe: Option<[u8; 3]>,
+    /// Depth bias of the wireframe, in 16-bit Z units.
+    #[serde(default = "default_bias")]
+    pub wire_bias: u16,
+}
+
+fn default_true() -> bool {
+    true
+}
+fn default_bias() -> u16 {
+    256
 }
 
 fn default_eye() -> [f64; 3] {
@@ -77,6 +94,8 @@ pub struct MeshStats {
     pub groups: usize,
     /// Triangles dropped: behind the near plane or beyond the guard band.
     pub dropped: usize,
+    /// Wireframe edges drawn as lines.
+    pub lines: usize,
 }
 
 type V3 = [f64; 3];
@@ -218,17 +237,45 @@ pub fn load(
                 .ok()
             })
             .collect();
+        let state = State {
+            wid: spec.window,
+            ..State::default()
+        };
+        let mut edges = std::collections::BTreeSet::new();
         for t in mesh.indices.chunks_exact(3) {
             stats.triangles += 1;
             match [t[0], t[1], t[2]].map(|i| verts[i as usize]) {
-                [Some(a), Some(b), Some(c)] => out.push(Command::Triangle {
-                    v: [a, b, c],
-                    state: State {
-                        wid: spec.window,
-                        ..State::default()
-                    },
-                }),
+                [Some(a), Some(b), Some(c)] => {
+                    if spec.faces {
+                        out.push(Command::Triangle {
+                            v: [a, b, c],
+                            state,
+                        });
+                    }
+                    for (i, j) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                        edges.insert((i.min(j), i.max(j)));
+                    }
+                }
                 _ => stats.dropped += 1,
+            }
+        }
+        if let Some(rgb) = spec.wireframe {
+            for (i, j) in edges {
+                let (Some(a), Some(b)) = (verts[i as usize], verts[j as usize]) else {
+                    continue;
+                };
+                let line = LineCmd {
+                    p0: (a.x, a.y),
+                    p1: (b.x, b.y),
+                    z: [
+                        a.z.saturating_sub(spec.wire_bias),
+                        b.z.saturating_sub(spec.wire_bias),
+                    ],
+                    color: Rgb::new(rgb[0], rgb[1], rgb[2]),
+                    style: LineStyle::SOLID,
+                };
+                out.push(Command::Line { line, state });
+                stats.lines += 1;
             }
         }
     }

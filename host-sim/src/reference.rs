@@ -106,6 +106,7 @@ pub fn render(cfg: &Config, cmds: &[Command]) -> RefFrame {
                 }
             }
             Command::Triangle { v, state } => triangle(&mut f, cfg, v, state.wid),
+            Command::Line { line, state } => line_ref(&mut f, cfg, line, state.wid),
         }
     }
     if cfg.format.is_gray() {
@@ -139,6 +140,53 @@ fn fragment(f: &mut RefFrame, cfg: &Config, i: usize, c: [f64; 3], z: f64, wid: 
         f.depth[i] = z;
     }
     f.color[i] = c;
+}
+
+/// Lines the obvious way: for each pixel centre along the major axis from
+/// `p0` (included) to `p1` (excluded), the pixel containing the exact line.
+fn line_ref(f: &mut RefFrame, cfg: &Config, l: &LineCmd, wid: u8) {
+    let (p, q) = (
+        (l.p0.0.to_bits() as i64, l.p0.1.to_bits() as i64),
+        (l.p1.0.to_bits() as i64, l.p1.1.to_bits() as i64),
+    );
+    let y_major = (q.1 - p.1).abs() > (q.0 - p.0).abs();
+    // (major, minor) coordinates.
+    let (a, b) = if y_major {
+        ((p.1, p.0), (q.1, q.0))
+    } else {
+        (p, q)
+    };
+    let len = b.0 - a.0;
+    if len == 0 {
+        return;
+    }
+    let dir = len.signum();
+    // First pixel centre at or after p0 in the direction of travel.
+    let mut c = if dir > 0 {
+        (a.0 - 8).div_euclid(16) + ((a.0 - 8).rem_euclid(16) != 0) as i64
+    } else {
+        (a.0 - 8).div_euclid(16)
+    };
+    let mut k = 0u32;
+    loop {
+        let centre = 16 * c + 8;
+        if (dir > 0 && centre >= b.0) || (dir < 0 && centre <= b.0) {
+            break;
+        }
+        // minor = a.1 + (centre - a.0) (b.1 - a.1) / len, exactly, floored to a pixel.
+        let (num, den) = (a.1 * len + (centre - a.0) * (b.1 - a.1), 16 * len);
+        let (num, den) = if den < 0 { (-num, -den) } else { (num, den) };
+        let minor = num.div_euclid(den);
+        let t = (centre - a.0) as f64 / len as f64;
+        let z = l.z[0] as f64 + t * (l.z[1] as f64 - l.z[0] as f64);
+        let (x, y) = if y_major { (minor, c) } else { (c, minor) };
+        if l.style.on(k) && x >= 0 && y >= 0 && x < f.width as i64 && y < f.height as i64 {
+            let i = (y as u32 * f.width + x as u32) as usize;
+            fragment(f, cfg, i, rgb(l.color), z, wid);
+        }
+        c += dir;
+        k += 1;
+    }
 }
 
 fn triangle(f: &mut RefFrame, cfg: &Config, v: &[Vertex; 3], wid: u8) {

@@ -44,6 +44,20 @@
 //! z = 30000
 //!
 //! [[command]]
+//! kind = "line"              # Bresenham, sub-pixel endpoints, end point excluded
+//! from = [10.5, 20]
+//! to = [200, 37.25]
+//! rgb = [255, 255, 0]
+//! z = [100, 100]             # optional depth at both ends
+//! style = { pattern = 0x0F0F, scale = 2 }   # optional on/off pattern
+//!
+//! [[command]]
+//! kind = "polyline"          # segments continue the style's phase
+//! points = [[10, 10], [50, 30], [90, 10]]
+//! rgb = [255, 255, 255]
+//! closed = false
+//!
+//! [[command]]
 //! kind = "mesh"              # an OBJ with its .mtl colours, camera and light
 //! obj = "../../shared/models/teapot.obj"
 //! eye = [0, 1, 3]
@@ -139,7 +153,60 @@ enum CommandSpec {
         #[serde(default)]
         window: u8,
     },
+    Line {
+        from: [f64; 2],
+        to: [f64; 2],
+        rgb: [u8; 3],
+        #[serde(default)]
+        z: [u16; 2],
+        style: Option<StyleSpec>,
+        #[serde(default)]
+        window: u8,
+        plane_mask: Option<u32>,
+    },
+    Polyline {
+        points: Vec<[f64; 2]>,
+        rgb: [u8; 3],
+        #[serde(default)]
+        z: u16,
+        #[serde(default)]
+        closed: bool,
+        style: Option<StyleSpec>,
+        #[serde(default)]
+        window: u8,
+        plane_mask: Option<u32>,
+    },
     Mesh(MeshSpec),
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StyleSpec {
+    pattern: u16,
+    #[serde(default = "one")]
+    scale: u8,
+}
+
+fn one() -> u8 {
+    1
+}
+
+fn line_style(s: &Option<StyleSpec>, phase: u16) -> LineStyle {
+    s.as_ref().map_or(
+        LineStyle {
+            phase,
+            ..LineStyle::SOLID
+        },
+        |s| LineStyle {
+            pattern: s.pattern,
+            scale: s.scale,
+            phase,
+        },
+    )
+}
+
+fn point(p: [f64; 2]) -> Result<(Coord, Coord), String> {
+    Ok((fix::<Coord>(p[0], "x")?, fix::<Coord>(p[1], "y")?))
 }
 
 /// A loaded scene: its configuration and display list.
@@ -349,12 +416,69 @@ impl Scene {
                     z: *z,
                     state: state(*window, None),
                 },
+                CommandSpec::Line {
+                    from,
+                    to,
+                    rgb,
+                    z,
+                    style,
+                    window,
+                    plane_mask,
+                } => {
+                    let line = LineCmd {
+                        p0: point(*from).map_err(at)?,
+                        p1: point(*to).map_err(at)?,
+                        z: *z,
+                        color: Rgb::new(rgb[0], rgb[1], rgb[2]),
+                        style: line_style(style, 0),
+                    };
+                    line.validate().map_err(|e| at(e.to_string()))?;
+                    Command::Line {
+                        line,
+                        state: state(*window, *plane_mask),
+                    }
+                }
+                CommandSpec::Polyline {
+                    points,
+                    rgb,
+                    z,
+                    closed,
+                    style,
+                    window,
+                    plane_mask,
+                } => {
+                    let mut pts = points
+                        .iter()
+                        .map(|p| point(*p))
+                        .collect::<Result<Vec<_>, _>>()
+                        .map_err(at)?;
+                    if *closed && pts.len() > 2 {
+                        pts.push(pts[0]);
+                    }
+                    let mut phase = 0;
+                    for seg in pts.windows(2) {
+                        let line = LineCmd {
+                            p0: seg[0],
+                            p1: seg[1],
+                            z: [*z; 2],
+                            color: Rgb::new(rgb[0], rgb[1], rgb[2]),
+                            style: line_style(style, phase),
+                        };
+                        line.validate().map_err(|e| at(e.to_string()))?;
+                        phase = line.next_phase();
+                        commands.push(Command::Line {
+                            line,
+                            state: state(*window, *plane_mask),
+                        });
+                    }
+                    continue;
+                }
                 CommandSpec::Mesh(spec) => {
                     let st = mesh::load(spec, base, (config.width, config.height), &mut commands)
                         .map_err(at)?;
                     notes.push(format!(
-                        "mesh {}: {} vertices, {} triangles, {} groups, {} dropped (near plane / guard band)",
-                        spec.obj, st.vertices, st.triangles, st.groups, st.dropped
+                        "mesh {}: {} vertices, {} triangles, {} groups, {} dropped (near plane / guard band), {} wireframe lines",
+                        spec.obj, st.vertices, st.triangles, st.groups, st.dropped, st.lines
                     ));
                     mesh_stats.vertices += st.vertices;
                     mesh_stats.triangles += st.triangles;

@@ -77,8 +77,8 @@ pub fn tri(v: [Vertex; 3], wid: u8) -> Command {
 
 /// A random command for a screen of about 100x80 pixels, drawing into window
 /// `wid`, sometimes with a partial plane mask: fills, Z fills, ramps (span
-/// commands whose colour and depth stay in range) and triangles reaching
-/// beyond the screen.
+/// commands whose colour and depth stay in range), styled lines and
+/// triangles reaching beyond the screen.
 pub fn random_command(rng: &mut Rng, wid: u8) -> Command {
     let mask = if rng.range(0, 4) == 0 {
         rng.next_u64() as u32
@@ -89,7 +89,36 @@ pub fn random_command(rng: &mut Rng, wid: u8) -> Command {
         wid,
         plane_mask: mask,
     };
-    match rng.range(0, 5) {
+    match rng.range(0, 6) {
+        5 => {
+            let mut p = || {
+                (
+                    Coord::from_bits(rng.range(-400, 1900) as i32),
+                    Coord::from_bits(rng.range(-400, 1500) as i32),
+                )
+            };
+            let (p0, p1) = (p(), p());
+            let z = [rng.range(0, 65536) as u16, rng.range(0, 65536) as u16];
+            let style = if rng.range(0, 2) == 0 {
+                LineStyle::SOLID
+            } else {
+                LineStyle {
+                    pattern: rng.next_u64() as u16,
+                    scale: rng.range(0, 4) as u8,
+                    phase: rng.range(0, 64) as u16,
+                }
+            };
+            Command::Line {
+                line: LineCmd {
+                    p0,
+                    p1,
+                    z,
+                    color: rng.rgb(),
+                    style,
+                },
+                state,
+            }
+        }
         0 => Command::Fill {
             rect: rng.rect((-20, 100), (-20, 80), 90, 70),
             color: rng.rgb(),

@@ -18,3 +18,8 @@ fn demo_matches_golden() {
 fn ssd1306_matches_golden() {
     check("ssd1306");
 }
+
+#[test]
+fn lines_match_golden() {
+    check("lines");
+}
