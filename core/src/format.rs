@@ -213,6 +213,9 @@ pub trait PixelFormat: 'static {
     /// Packs an `embedded-graphics` colour (what a tile stores when used as
     /// a `DrawTarget`).
     fn from_color(c: Self::Color) -> u32;
+    /// Splits a packed pixel into its channel values (each `0..=MAX`): what
+    /// blending reads back.
+    fn unpack(raw: u32) -> Self::Lanes;
 
     /// A flat colour, rounded to nearest, packed: what fills write (the seed's
     /// fill bypasses the interpolating channels and the dither).
@@ -294,6 +297,16 @@ macro_rules! rgb_format {
             fn from_color(c: $color) -> u32 {
                 Self::pack([c.r() as i32, c.g() as i32, c.b() as i32])
             }
+            #[inline]
+            fn unpack(raw: u32) -> [i32; 3] {
+                const GB: u32 = ($g as u32 + 1).trailing_zeros();
+                const BB: u32 = ($b as u32 + 1).trailing_zeros();
+                [
+                    (raw >> (GB + BB)) as i32 & $r,
+                    (raw >> BB) as i32 & $g,
+                    raw as i32 & $b,
+                ]
+            }
         }
     };
 }
@@ -350,6 +363,9 @@ impl PixelFormat for Gray8Format {
     fn from_color(c: Gray8) -> u32 {
         c.luma() as u32
     }
+    fn unpack(raw: u32) -> [i32; 1] {
+        [raw as i32 & 255]
+    }
 }
 
 /// 1 bit per pixel (SSD1306 class), 8 pixels per byte. Shading shows only
@@ -376,6 +392,9 @@ impl PixelFormat for BinaryFormat {
     }
     fn from_color(c: BinaryColor) -> u32 {
         c.is_on() as u32
+    }
+    fn unpack(raw: u32) -> [i32; 1] {
+        [raw as i32 & 1]
     }
 }
 

@@ -18,6 +18,8 @@ pub trait DepthPlane {
     fn read(&self, i: usize) -> u16;
     /// The Z test: passes and stores when `z` is less than the stored value.
     fn test_and_set(&mut self, i: usize, z: u16) -> bool;
+    /// The Z test without the write (partial-coverage fragments).
+    fn test(&self, i: usize, z: u16) -> bool;
 }
 
 /// Window-ID plane storage.
@@ -91,6 +93,10 @@ impl<const N: usize> DepthPlane for Plane<u16, N> {
         self.0.as_flattened()[i]
     }
     #[inline(always)]
+    fn test(&self, i: usize, z: u16) -> bool {
+        z < self.0.as_flattened()[i]
+    }
+    #[inline(always)]
     fn test_and_set(&mut self, i: usize, z: u16) -> bool {
         let cell = &mut self.0.as_flattened_mut()[i];
         if z < *cell {
@@ -112,6 +118,10 @@ impl DepthPlane for () {
     }
     #[inline(always)]
     fn test_and_set(&mut self, _: usize, _: u16) -> bool {
+        true
+    }
+    #[inline(always)]
+    fn test(&self, _: usize, _: u16) -> bool {
         true
     }
 }

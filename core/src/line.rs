@@ -75,7 +75,7 @@ impl Default for LineStyle {
 /// use tilerast::prelude::*;
 /// use tilerast::line::{LineCmd, LineStyle};
 /// let p = |x: i32, y: i32| (Coord::from_num(x) + Coord::from_num(0.5), Coord::from_num(y) + Coord::from_num(0.5));
-/// let l = LineCmd { p0: p(0, 0), p1: p(10, 3), z: [0, 0], color: Rgb::new(255, 255, 255), style: LineStyle::SOLID };
+/// let l = LineCmd { p0: p(0, 0), p1: p(10, 3), z: [0, 0], color: Rgb::new(255, 255, 255), style: LineStyle::SOLID, antialias: false };
 /// assert_eq!(l.steps(), 10); // columns 0..10, the end pixel excluded
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -90,6 +90,8 @@ pub struct LineCmd {
     pub color: Rgb,
     /// On/off pattern.
     pub style: LineStyle,
+    /// Two-point (Wu) antialiasing instead of Bresenham.
+    pub antialias: bool,
 }
 
 /// A line in major/minor axes, ready to walk.
@@ -164,7 +166,8 @@ impl LineCmd {
                 div_floor(b - half - 1, SUBPIXEL),
             )
         };
-        (first <= last).then_some(LineSetup {
+        // `first > last` (no centre on the line) still leaves Wu's coverage.
+        Some(LineSetup {
             y_major,
             a,
             b,
@@ -181,7 +184,10 @@ impl LineCmd {
     /// Pixels the line steps through (drawn or not by the style): what a
     /// polyline adds to the phase of its next segment.
     pub fn steps(&self) -> u32 {
-        self.setup().map_or(0, |s| (s.last - s.first + 1) as u32)
+        self.setup().map_or(0, |s| {
+            let (first, last) = s.columns(self.antialias);
+            (last - first + 1).max(0) as u32
+        })
     }
 
     /// The style phase for a segment that continues this one.
@@ -193,42 +199,69 @@ impl LineCmd {
     /// The screen pixels the line can touch.
     pub fn bounds(&self) -> Option<Rect> {
         let s = self.setup()?;
-        let lo = div_floor(s.m0.min(s.m0 + s.dm), SUBPIXEL);
-        let hi = div_floor(s.m0.max(s.m0 + s.dm), SUBPIXEL);
-        let (w, h) = ((s.last - s.first + 1) as u32, (hi - lo + 1) as u32);
+        let (first, last) = s.columns(self.antialias);
+        if first > last {
+            return None;
+        }
+        // Wu also touches the pixel after the one containing the line.
+        let lo = div_floor(s.m0.min(s.m0 + s.dm), SUBPIXEL) - self.antialias as i64;
+        let hi = div_floor(s.m0.max(s.m0 + s.dm), SUBPIXEL) + self.antialias as i64;
+        let (w, h) = ((last - first + 1) as u32, (hi - lo + 1) as u32);
         Some(if s.y_major {
-            Rect::new(lo as i32, s.first as i32, h, w)
+            Rect::new(lo as i32, first as i32, h, w)
         } else {
-            Rect::new(s.first as i32, lo as i32, w, h)
+            Rect::new(first as i32, lo as i32, w, h)
         })
     }
 }
 
+/// Weights of the two-point antialiased pixels are in 1/256.
+pub(crate) const WU_ONE: i32 = 256;
+
 impl LineSetup {
-    /// Calls `f(k, major, minor, z_16_14)` for each pixel whose major index
-    /// lies in `lo..hi`, with `k` its index from the start point.
+    /// First and last pixel along the major axis: those whose centre lies
+    /// in the line (Bresenham), or whose cell it touches (Wu, which weights
+    /// the end cells by their coverage).
+    pub(crate) fn columns(&self, antialias: bool) -> (i64, i64) {
+        if antialias {
+            (div_floor(self.a, SUBPIXEL), div_floor(self.b - 1, SUBPIXEL))
+        } else {
+            (self.first, self.last)
+        }
+    }
+
+    /// Offset of column `c`'s centre from `a`, in sub-pixels.
+    fn centre(&self, c: i64) -> i64 {
+        SUBPIXEL * c + SUBPIXEL / 2 - self.a
+    }
+
+    /// Z at column centres from `c0` on, in 16.14 (the span path adds the
+    /// rounding half): floor((z0 len + t dz) 2^14 / len), below 2^50.
+    fn z_walk(&self, c0: i64) -> FloorWalk {
+        let (len, zs) = (self.b - self.a, 1i64 << Z_FRAC);
+        FloorWalk::new(
+            (self.z0 * len + self.centre(c0) * self.dz) * zs,
+            len,
+            SUBPIXEL * self.dz * zs,
+        )
+    }
+
+    /// Calls `f(k, major, minor, z_16_14)` for each Bresenham pixel whose
+    /// major index lies in `lo..hi`, with `k` its index from the start point.
     pub(crate) fn walk(&self, lo: i64, hi: i64, mut f: impl FnMut(u32, i64, i64, i32)) {
         let (c0, c1) = (self.first.max(lo), (self.last + 1).min(hi));
         if c0 >= c1 {
             return;
         }
         let len = self.b - self.a;
-        let centre = |c: i64| SUBPIXEL * c + SUBPIXEL / 2 - self.a;
         // minor(c) = m0 + (centre - a) dm / len: pixel floor(minor / 16)
         //          = floor((m0 len + (centre - a) dm) / (16 len)).
         let mut minor = FloorWalk::new(
-            self.m0 * len + centre(c0) * self.dm,
+            self.m0 * len + self.centre(c0) * self.dm,
             SUBPIXEL * len,
             SUBPIXEL * self.dm,
         );
-        // Z in 16.14 (the span path adds the rounding half):
-        // floor((z0 len + t dz) 2^14 / len). Magnitudes stay below 2^50.
-        let zs = 1i64 << Z_FRAC;
-        let mut z = FloorWalk::new(
-            (self.z0 * len + centre(c0) * self.dz) * zs,
-            len,
-            SUBPIXEL * self.dz * zs,
-        );
+        let mut z = self.z_walk(c0);
         for c in c0..c1 {
             let k = if self.reversed {
                 self.last - c
@@ -237,6 +270,45 @@ impl LineSetup {
             };
             f(k as u32, c, minor.q, z.q as i32);
             minor.next();
+            z.next();
+        }
+    }
+
+    /// Two-point antialiasing (seed 003, eqs. 4 and 7): for each column in
+    /// `lo..hi` the line touches, calls `f(k, major, minor, w0, w1, z)` for
+    /// the pixels `minor` and `minor + 1` straddling the line at the column
+    /// centre, with weights `w0 + w1` equal to the column's coverage along
+    /// the major axis ([`WU_ONE`] inside, less at the end cells), split by
+    /// the distance `D` to pixel `minor`'s centre: `w1 = D cov`, `w0 = cov - w1`.
+    pub(crate) fn walk_wu(
+        &self,
+        lo: i64,
+        hi: i64,
+        mut f: impl FnMut(u32, i64, i64, i32, i32, i32),
+    ) {
+        let (first, last) = self.columns(true);
+        let (c0, c1) = (first.max(lo), (last + 1).min(hi));
+        if c0 >= c1 {
+            return;
+        }
+        let len = self.b - self.a;
+        // Minor position in pixel-centre coordinates, in 1/256 pixel:
+        // u = (minor - 8) / 16 * 256 = 16 (minor - 8), with minor exact.
+        let mut u = FloorWalk::new(
+            16 * ((self.m0 - SUBPIXEL / 2) * len + self.centre(c0) * self.dm),
+            len,
+            256 * self.dm,
+        );
+        let mut z = self.z_walk(c0);
+        for c in c0..c1 {
+            let k = if self.reversed { last - c } else { c - first };
+            let cell =
+                (self.b.min(SUBPIXEL * c + SUBPIXEL) - self.a.max(SUBPIXEL * c)).clamp(0, SUBPIXEL);
+            let cover = cell as i32 * WU_ONE / SUBPIXEL as i32;
+            let d = (u.q & 255) as i32;
+            let w1 = (d * cover) >> 8;
+            f(k as u32, c, u.q >> 8, cover - w1, w1, z.q as i32);
+            u.next();
             z.next();
         }
     }

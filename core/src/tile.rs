@@ -7,12 +7,14 @@
 //! the exact cost) and their per-pixel test is the constant `true`.
 
 use crate::command::{Command, State};
+use crate::dither::{quantize, round_bias};
 use crate::dither::{Dither, NoDither};
 use crate::error::Error;
 use crate::format::{ColorPlane, Lanes, PixelFormat, Rgb};
 use crate::fragment::{DepthMode, DepthPlane, NoDepth, NoWid, WidMode, WidPlane};
 use crate::frame::Clear;
 use crate::geom::Rect;
+use crate::numeric::{z_to_u16, COLOR_FRAC, Z_FRAC};
 use crate::setup::TriangleSetup;
 use crate::span::SpanStart;
 use crate::traverse::for_each_span;
@@ -174,20 +176,60 @@ impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Tile<N
             (a.x as i64, a.x1(), a.y as i64, a.y1())
         };
         let c = l.color;
-        let c = F::lanes_from_rgb(
-            [c.r as i64, c.g as i64, c.b as i64].map(|v| v << crate::numeric::COLOR_FRAC),
-        );
-        let dc = c.map(|_| 0);
-        s.walk(lo, hi, |k, major, minor, z| {
-            if (mlo..mhi).contains(&minor) && l.style.on(k) {
-                let (x, y) = if s.y_major {
-                    (minor, major)
-                } else {
-                    (major, minor)
-                };
-                self.span(x, y, 1, SpanStart { c, dc, z, dz: 0 }, st);
+        let c = F::lanes_from_rgb([c.r as i64, c.g as i64, c.b as i64].map(|v| v << COLOR_FRAC));
+        let xy = |major: i64, minor: i64| {
+            if s.y_major {
+                (minor, major)
+            } else {
+                (major, minor)
             }
+        };
+        if l.antialias {
+            s.walk_wu(lo, hi, |k, major, minor, w0, w1, z| {
+                if l.style.on(k) {
+                    for (m, w) in [(minor, w0), (minor + 1, w1)] {
+                        if w > 0 && (mlo..mhi).contains(&m) {
+                            let (x, y) = xy(major, m);
+                            self.blend(x, y, c, w, z, st);
+                        }
+                    }
+                }
+            });
+        } else {
+            let dc = c.map(|_| 0);
+            s.walk(lo, hi, |k, major, minor, z| {
+                if (mlo..mhi).contains(&minor) && l.style.on(k) {
+                    let (x, y) = xy(major, minor);
+                    self.span(x, y, 1, SpanStart { c, dc, z, dz: 0 }, st);
+                }
+            });
+        }
+    }
+
+    /// Blends colour `c` (output scale, 16 fraction bits) with weight `w`
+    /// (in 1/256) over the pixel at screen `(x, y)` — seed 003 eq. 7,
+    /// `C = C_bg + (C_line - C_bg) w` — after the window-ID test and a
+    /// read-only Z test (partial coverage does not claim depth), then
+    /// dither, pack and plane mask as every fragment.
+    fn blend(&mut self, x: i64, y: i64, c: F::Lanes, w: i32, z: i32, st: &State) {
+        let a = self.area;
+        let idx = ((y - a.y as i64) * a.w as i64 + (x - a.x as i64)) as usize;
+        if !self.wid.pass(idx, st.wid) || !self.depth.test(idx, z_to_u16(z + (1 << (Z_FRAC - 1)))) {
+            return;
+        }
+        let old = F::unpack(self.color.get(idx));
+        let bias = round_bias::<D>();
+        // (line - old) has at most 8 integer bits; dropping 8 of its 16
+        // fraction bits keeps the product with w <= 256 within i32.
+        let v = c.zip(old, |line, bg| {
+            let bg = bg << COLOR_FRAC;
+            bg + (((line - bg) >> 8) * w) + bias
         });
+        let t = D::threshold(x as u32, y as u32);
+        let raw = F::pack(v.zip(F::MAX, |v, max| quantize::<D>(v, max, t)));
+        let mask = st.plane_mask & F::MASK_ALL;
+        let raw = (self.color.get(idx) & !mask) | (raw & mask);
+        self.color.set(idx, raw);
     }
 
     fn fill(&mut self, rect: &Rect, color: Rgb, st: &State) {

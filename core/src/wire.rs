@@ -14,7 +14,7 @@
 //! | 4 | fill | `x: i32, y: i32, w: u32, h: u32, r, g, b` |
 //! | 5 | Z fill | `x: i32, y: i32, w: u32, h: u32, z: u16` |
 //! | 6 | window-ID fill | `x: i32, y: i32, w: u32, h: u32` (its `wid` is the ID; no mask) |
-//! | 8 | line | `x0, y0, x1, y1: i32, z0, z1: u16, r, g, b, pattern: u16, scale: u8, phase: u16` |
+//! | 8 | line | `x0, y0, x1, y1: i32, z0, z1: u16, r, g, b, pattern: u16, scale: u8, phase: u16, antialias: u8` |
 //! | 7 | indexed mesh: triangles sharing vertices | `nv: u16, nt: u16`, `nv` x (`x: i16, y: i16, z: u16, r, g, b`), `nt` x 3 x `u16` index |
 //!
 //! A mesh record replays as its `nt` triangles, in order, each with the
@@ -181,6 +181,7 @@ pub fn encode(cmd: &Command, buf: &mut [u8]) -> Result<usize, Error> {
             w.put(&l.style.pattern.to_le_bytes())?;
             w.put(&[l.style.scale])?;
             w.put(&l.style.phase.to_le_bytes())?;
+            w.put(&[l.antialias as u8])?;
         }
         Command::Fill { rect, color, state } => {
             w.head(4, state)?;
@@ -247,6 +248,11 @@ pub fn decode(buf: &[u8]) -> Result<(Command, usize), Error> {
                 scale: r.u8()?,
                 phase: r.u16()?,
             };
+            let antialias = match r.u8()? {
+                0 => false,
+                1 => true,
+                _ => return Err(Error::Malformed),
+            };
             Command::Line {
                 line: LineCmd {
                     p0,
@@ -254,6 +260,7 @@ pub fn decode(buf: &[u8]) -> Result<(Command, usize), Error> {
                     z,
                     color,
                     style,
+                    antialias,
                 },
                 state,
             }

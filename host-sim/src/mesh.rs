@@ -52,6 +52,9 @@ pub struct MeshSpec {
     /// are Z-tested with `wire_bias` pulled towards the viewer, so they show
     /// on their own faces and hide behind others.
     pub wireframe: Option<[u8; 3]>,
+    /// Draw the wireframe with two-point (Wu) antialiasing.
+    #[serde(default)]
+    pub wire_aa: bool,
     /// Depth bias of the wireframe, in 16-bit Z units.
     #[serde(default = "default_bias")]
     pub wire_bias: u16,
@@ -273,6 +276,7 @@ pub fn load(
                     ],
                     color: Rgb::new(rgb[0], rgb[1], rgb[2]),
                     style: LineStyle::SOLID,
+                    antialias: spec.wire_aa,
                 };
                 out.push(Command::Line { line, state });
                 stats.lines += 1;

@@ -50,6 +50,7 @@
 //! rgb = [255, 255, 0]
 //! z = [100, 100]             # optional depth at both ends
 //! style = { pattern = 0x0F0F, scale = 2 }   # optional on/off pattern
+//! aa = true                  # optional: two-point (Wu) antialiasing
 //!
 //! [[command]]
 //! kind = "polyline"          # segments continue the style's phase
@@ -161,6 +162,8 @@ enum CommandSpec {
         z: [u16; 2],
         style: Option<StyleSpec>,
         #[serde(default)]
+        aa: bool,
+        #[serde(default)]
         window: u8,
         plane_mask: Option<u32>,
     },
@@ -172,6 +175,8 @@ enum CommandSpec {
         #[serde(default)]
         closed: bool,
         style: Option<StyleSpec>,
+        #[serde(default)]
+        aa: bool,
         #[serde(default)]
         window: u8,
         plane_mask: Option<u32>,
@@ -422,6 +427,7 @@ impl Scene {
                     rgb,
                     z,
                     style,
+                    aa,
                     window,
                     plane_mask,
                 } => {
@@ -431,6 +437,7 @@ impl Scene {
                         z: *z,
                         color: Rgb::new(rgb[0], rgb[1], rgb[2]),
                         style: line_style(style, 0),
+                        antialias: *aa,
                     };
                     line.validate().map_err(|e| at(e.to_string()))?;
                     Command::Line {
@@ -444,6 +451,7 @@ impl Scene {
                     z,
                     closed,
                     style,
+                    aa,
                     window,
                     plane_mask,
                 } => {
@@ -463,6 +471,7 @@ impl Scene {
                             z: [*z; 2],
                             color: Rgb::new(rgb[0], rgb[1], rgb[2]),
                             style: line_style(style, phase),
+                            antialias: *aa,
                         };
                         line.validate().map_err(|e| at(e.to_string()))?;
                         phase = line.next_phase();

@@ -115,6 +115,7 @@ pub fn random_command(rng: &mut Rng, wid: u8) -> Command {
                     z,
                     color: rng.rgb(),
                     style,
+                    antialias: rng.range(0, 2) == 0,
                 },
                 state,
             }

@@ -19,6 +19,7 @@ fn line(p0: (i64, i64), p1: (i64, i64), style: LineStyle) -> Command {
         z: [1000, 3000],
         color: Rgb::new(255, 255, 255),
         style,
+        antialias: false,
     };
     Command::Line {
         line,
@@ -161,6 +162,7 @@ fn style_phase_continues_along_a_polyline() {
         z: [0, 0],
         color: Rgb::new(255, 255, 255),
         style,
+        antialias: false,
     };
     let first = LineCmd {
         p1: pt(16 * 17 + 8, y),
@@ -239,4 +241,83 @@ fn long_lines_far_outside_clip_like_lines_ending_on_the_screen_edge() {
         line((-lim - 1, 0), (0, 0), LineStyle::SOLID).validate(),
         Err(Error::CoordOutOfRange)
     );
+}
+
+fn wu(p0: (i64, i64), p1: (i64, i64)) -> Command {
+    let line = LineCmd {
+        p0: pt(p0.0, p0.1),
+        p1: pt(p1.0, p1.1),
+        z: [0, 0],
+        color: Rgb::new(255, 255, 255),
+        style: LineStyle::SOLID,
+        antialias: true,
+    };
+    Command::Line {
+        line,
+        state: State::default(),
+    }
+}
+
+/// A white Wu line on black, RGB888, no dither: the red channel per pixel,
+/// and the f64 reference's.
+fn wu_frame(cmd: Command, tile: (u16, u16)) -> (Vec<u32>, Vec<f64>) {
+    let mut c = config(64, 48, FormatKind::Rgb888);
+    c.tile = tile;
+    let ours = render(&c, &[cmd]).unwrap();
+    let exact = reference::render(&c, &[cmd]);
+    (
+        ours.raw.iter().map(|p| p >> 16).collect(),
+        exact.color.iter().map(|c| c[0]).collect(),
+    )
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(tilerast_tests::cases(200)))]
+    /// Seed 003 eq. 4: the two pixels of a step share the line's intensity.
+    /// Each pixel is within 2.5 LSB of the exact two-point value (the
+    /// distance and its product with the coverage are floored to 1/256:
+    /// 2/256 of 255; plus 0.5 for rounding). Summed across each column,
+    /// intensity equals 255 times the column's coverage along the line
+    /// within 2 LSB (the two weights add up to the coverage exactly; each
+    /// pixel rounds), at any tiling: no brightening or dimming at the ends
+    /// or at tile borders.
+    #[test]
+    fn wu_intensity_per_step_equals_coverage(
+        a in (64i64..960, 64i64..700), b in (64i64..960, 64i64..700), tw in 1u16..64, th in 1u16..48,
+    ) {
+        let (ours, exact) = wu_frame(wu(a, b), (tw, th));
+        for i in 0..ours.len() {
+            prop_assert!((ours[i] as f64 - exact[i]).abs() <= 2.5, "pixel {}: {} vs {}", i, ours[i], exact[i]);
+        }
+        let y_major = (b.1 - a.1).abs() > (b.0 - a.0).abs();
+        let (lo, hi) = if y_major { (a.1.min(b.1), a.1.max(b.1)) } else { (a.0.min(b.0), a.0.max(b.0)) };
+        for c in 0..if y_major { 48 } else { 64 } {
+            let cover = ((hi.min(16 * c + 16) - lo.max(16 * c)).clamp(0, 16)) as f64 / 16.0;
+            let sum: u32 = if y_major {
+                (0..64).map(|x| ours[(c * 64 + x) as usize]).sum()
+            } else {
+                (0..48).map(|y| ours[(y * 64 + c) as usize]).sum()
+            };
+            prop_assert!((sum as f64 - 255.0 * cover).abs() <= 2.0, "column {}: {} vs {}", c, sum, 255.0 * cover);
+        }
+    }
+}
+
+#[test]
+fn wu_line_total_intensity_is_its_length() {
+    // 10 pixels long, from one pixel centre to another: the end cells are
+    // half covered, so the first and last pixels are half bright.
+    let (ours, _) = wu_frame(
+        wu((16 * 2 + 8, 16 * 5 + 8), (16 * 12 + 8, 16 * 5 + 8)),
+        (64, 48),
+    );
+    let row: Vec<u32> = (0..64).map(|x| ours[5 * 64 + x]).collect();
+    assert_eq!(
+        &row[2..=12],
+        &[128, 255, 255, 255, 255, 255, 255, 255, 255, 255, 128]
+    );
+    assert_eq!(ours.iter().sum::<u32>(), 9 * 255 + 2 * 128);
+    // Half a pixel below the centres: the intensity splits evenly over two rows.
+    let (ours, _) = wu_frame(wu((16 * 2, 16 * 5 + 16), (16 * 12, 16 * 5 + 16)), (64, 48));
+    assert_eq!((ours[5 * 64 + 6], ours[6 * 64 + 6]), (128, 128));
 }
