@@ -3,8 +3,10 @@
 //!
 //! Each benchmark renders into one 64x64 tile (512 groups of 8 pixels):
 //! 300 random Gouraud triangles (about 20 px across) with and without Z,
-//! window ID and dither, and flat area fills. Throughput counts pixels
-//! rasterized (covered pixels summed over triangles, overdraw included).
+//! window ID and dither, and flat area fills — throughput counts pixels
+//! rasterized (covered pixels summed over triangles, overdraw included) —
+//! and the firmware's line workload, Bresenham, Wu and `embedded-graphics`'
+//! `Line`, whose throughput counts steps along the lines' major axes.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use std::hint::black_box;
@@ -75,6 +77,33 @@ fn raster(c: &mut Criterion) {
         Rgb565Format, Depth16, Wid8, Bayer8, "gouraud_z_wid_dither8_rgb565";
         Rgb888Format, Depth16, NoWid, NoDither, "gouraud_z_rgb888";
         BinaryFormat, Depth16, NoWid, Bayer4, "gouraud_z_dither4_binary";
+    }
+
+    // Lines: per step along the major axis; ours and embedded-graphics' Line.
+    use tilerast_fw::workloads::{self, LINE_CMDS, WU_LINE_CMDS};
+    let steps = workloads::line_steps(&LINE_CMDS);
+    bench_tile::<Rgb565Format, NoDepth, NoWid, NoDither>(
+        c,
+        "lines",
+        "bresenham_rgb565",
+        &LINE_CMDS,
+        steps,
+    );
+    bench_tile::<Rgb565Format, NoDepth, NoWid, NoDither>(
+        c,
+        "lines",
+        "wu_rgb565",
+        &WU_LINE_CMDS,
+        steps,
+    );
+    {
+        let mut g = c.benchmark_group("lines");
+        g.throughput(Throughput::Elements(steps));
+        let mut tile: Box<Base<Rgb565Format, NoDepth, NoWid, NoDither>> = Box::default();
+        g.bench_function(BenchmarkId::from_parameter("eg_line_rgb565"), |b| {
+            b.iter(|| workloads::eg_lines(&mut tile, black_box(&LINE_CMDS), &mut || 0).unwrap())
+        });
+        g.finish();
     }
 
     let fills: Vec<Command> = (0..16)

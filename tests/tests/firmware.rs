@@ -11,7 +11,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command as Process;
 use tilerast_fw::report::{scene_crc, Demo, SceneKind, Ssd1306};
-use tilerast_fw::workloads::{self, FILL_CMDS, TRIANGLE_CMDS};
+use tilerast_fw::workloads::{self, FILL_CMDS, LINE_CMDS, TRIANGLE_CMDS};
 use tilerast_sim::Scene;
 use tilerast_tests::{repo, scene};
 
@@ -298,6 +298,35 @@ fn report(reports: &[BoardResult]) -> String {
         let ours = b.benches["gouraud_rgb565"] as f64 / tri_px as f64;
         let eg = b.benches["eg_triangle_rgb565"] as f64 / eg_px as f64;
         md += &format!(" {:.2} |", eg / ours);
+    }
+    let steps = workloads::line_steps(&LINE_CMDS);
+    md += &format!(
+        "\n\n## Lines\n\n{n} lines across the tile in every direction ({steps} steps along \
+         their major axes; the Wu lines touch the end cells too). Per step: Bresenham writes one \
+         pixel, Wu blends two (read, blend, write).\n\n| lines | ",
+        n = workloads::LINES
+    );
+    md += &boards
+        .iter()
+        .map(|b| format!("{} instr/step", b.board))
+        .collect::<Vec<_>>()
+        .join(" | ");
+    md += " |\n| --- |";
+    md += &" ---: |".repeat(boards.len());
+    md += "\n";
+    for (label, key) in [
+        ("Bresenham, RGB565", "bresenham_rgb565"),
+        ("two-point (Wu) antialiased, RGB565", "wu_rgb565"),
+        ("embedded-graphics `Line` (1 px stroke)", "eg_line_rgb565"),
+    ] {
+        md += &format!("| {label} |");
+        for b in &boards {
+            md += &format!(
+                " {:.1} |",
+                b.benches[key] as f64 * b.instr_per_tick / steps as f64
+            );
+        }
+        md += "\n";
     }
     md += "\n\n## Whole frames\n\n| board | scene | tile | raster instr/px | flush instr/px | total instr/frame | CRC |\n| --- | --- | --- | ---: | ---: | ---: | --- |\n";
     for b in &boards {

@@ -228,7 +228,7 @@ fn bench() -> Result<(), String> {
     )?;
     let root = std::path::Path::new("target/criterion");
     let mut rows = vec![];
-    for group in ["triangles", "fill"] {
+    for group in ["triangles", "fill", "lines"] {
         let dir = root.join(group);
         let mut names: Vec<_> = std::fs::read_dir(&dir)
             .map_err(|e| format!("{}: {e}", dir.display()))?
@@ -268,7 +268,7 @@ fn bench() -> Result<(), String> {
         .unwrap_or_else(|| "unknown CPU".into());
     let mut md = format!(
         "# Host benchmark (criterion, `cargo xtask bench`)\n\nMachine: {cpu}, {} logical CPUs; {}.\n\n\
-         | benchmark | ns / pixel (median) | Mpixel/s | vs gouraud_rgb565 |\n| --- | ---: | ---: | ---: |\n",
+         | benchmark | ns / element (median) | M elements/s | vs gouraud_rgb565 |\n| --- | ---: | ---: | ---: |\n",
         std::thread::available_parallelism().map(|n| n.get()).unwrap_or(0),
         output("rustc", &["--version"]).trim()
     );
@@ -279,6 +279,7 @@ fn bench() -> Result<(), String> {
             ns / base
         );
     }
+    md += "\nElements are pixels for triangles and fills, steps along the major axis for lines.\n";
     std::fs::create_dir_all("reports").map_err(|e| e.to_string())?;
     std::fs::write("reports/bench.md", &md).map_err(|e| e.to_string())?;
     println!("{md}");

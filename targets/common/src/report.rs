@@ -3,7 +3,7 @@
 //! the host with any clock, so the host computes the CRCs the boards must
 //! print.
 
-use crate::workloads::{self, FILL_CMDS, TRIANGLE_CMDS};
+use crate::workloads::{self, FILL_CMDS, LINE_CMDS, TRIANGLE_CMDS, WU_LINE_CMDS};
 use crate::{run_scene, Clock, SceneRun};
 use core::fmt::Write;
 use embedded_graphics::{pixelcolor::IntoStorage, prelude::Size};
@@ -92,20 +92,30 @@ where
     }
 }
 
+/// How a workload is drawn.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Via {
+    /// The tilerast command itself.
+    Ours,
+    /// `embedded-graphics`' own primitive for it.
+    EmbeddedGraphics,
+}
+
 #[inline(never)]
 fn bench_one<F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither>(
     name: &str,
     cmds: &[Command],
-    eg: bool,
+    via: Via,
     out: &mut impl Write,
     clock: &mut impl Clock,
 ) -> core::fmt::Result {
     let mut tile: Tile<{ (workloads::SIDE * workloads::SIDE / 8) as usize }, F, Z, W, D> =
         Tile::new();
-    let ticks = if eg {
-        workloads::eg_triangles(&mut tile, cmds, clock)
-    } else {
-        workloads::draw(&mut tile, cmds, clock)
+    let lines = matches!(cmds.first(), Some(Command::Line { .. }));
+    let ticks = match (via, lines) {
+        (Via::Ours, _) => workloads::draw(&mut tile, cmds, clock),
+        (Via::EmbeddedGraphics, false) => workloads::eg_triangles(&mut tile, cmds, clock),
+        (Via::EmbeddedGraphics, true) => workloads::eg_lines(&mut tile, cmds, clock),
     };
     match ticks {
         Ok(t) => writeln!(out, "bench {name} ticks {t}"),
@@ -115,43 +125,71 @@ fn bench_one<F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither>(
 
 /// Prints `bench NAME ticks T` for each workload: flat fill; Gouraud
 /// alone, with Z, with Z and window ID, and with those and 8x8 dither (all
-/// RGB565); and the same triangles through `embedded-graphics`' `Triangle`
-/// fill.
+/// RGB565); the same triangles through `embedded-graphics`' `Triangle`
+/// fill; lines, Bresenham and two-point (Wu) antialiased, and the same
+/// lines through `embedded-graphics`' `Line`.
 pub fn report_benches(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt::Result {
+    let tris: &[Command] = &TRIANGLE_CMDS;
     bench_one::<Rgb565Format, NoDepth, NoWid, NoDither>(
         "fill_rgb565",
         &FILL_CMDS,
-        false,
+        Via::Ours,
         out,
         clock,
     )?;
-    let tris = &TRIANGLE_CMDS;
-    bench_one::<Rgb565Format, NoDepth, NoWid, NoDither>("gouraud_rgb565", tris, false, out, clock)?;
+    bench_one::<Rgb565Format, NoDepth, NoWid, NoDither>(
+        "gouraud_rgb565",
+        tris,
+        Via::Ours,
+        out,
+        clock,
+    )?;
     bench_one::<Rgb565Format, Depth16, NoWid, NoDither>(
         "gouraud_z_rgb565",
         tris,
-        false,
+        Via::Ours,
         out,
         clock,
     )?;
     bench_one::<Rgb565Format, Depth16, Wid8, NoDither>(
         "gouraud_z_wid_rgb565",
         tris,
-        false,
+        Via::Ours,
         out,
         clock,
     )?;
     bench_one::<Rgb565Format, Depth16, Wid8, Bayer8>(
         "gouraud_z_wid_dither8_rgb565",
         tris,
-        false,
+        Via::Ours,
         out,
         clock,
     )?;
     bench_one::<Rgb565Format, NoDepth, NoWid, NoDither>(
         "eg_triangle_rgb565",
         tris,
-        true,
+        Via::EmbeddedGraphics,
+        out,
+        clock,
+    )?;
+    bench_one::<Rgb565Format, NoDepth, NoWid, NoDither>(
+        "bresenham_rgb565",
+        &LINE_CMDS,
+        Via::Ours,
+        out,
+        clock,
+    )?;
+    bench_one::<Rgb565Format, NoDepth, NoWid, NoDither>(
+        "wu_rgb565",
+        &WU_LINE_CMDS,
+        Via::Ours,
+        out,
+        clock,
+    )?;
+    bench_one::<Rgb565Format, NoDepth, NoWid, NoDither>(
+        "eg_line_rgb565",
+        &LINE_CMDS,
+        Via::EmbeddedGraphics,
         out,
         clock,
     )

@@ -19,12 +19,86 @@ pub const SIDE: u32 = 32;
 pub const TRIANGLES: usize = 64;
 /// Full-tile fills per workload.
 pub const FILLS: usize = 8;
+/// Lines per workload.
+pub const LINES: usize = 48;
 
 /// Small Gouraud triangles (about 12 px across) with random depth and
 /// colours, scattered over the tile.
 pub static TRIANGLE_CMDS: [Command; TRIANGLES] = triangles();
 /// Full-tile flat fills.
 pub static FILL_CMDS: [Command; FILLS] = fills();
+/// Lines across the tile in every direction, Bresenham.
+pub static LINE_CMDS: [Command; LINES] = lines(false);
+/// The same lines, two-point (Wu) antialiased.
+pub static WU_LINE_CMDS: [Command; LINES] = lines(true);
+
+const fn lines(antialias: bool) -> [Command; LINES] {
+    let mut rng = Rng::new(0x6c69_6e65_7377_7521);
+    let side = SIDE as i64 * 16;
+    let mut out = [Command::WidFill {
+        rect: Rect::new(0, 0, 0, 0),
+        wid: 0,
+    }; LINES];
+    let mut i = 0;
+    while i < LINES {
+        let p = rng.vertex((8, side - 8), (8, side - 8));
+        let q = rng.vertex((8, side - 8), (8, side - 8));
+        let line = LineCmd {
+            p0: (p.x, p.y),
+            p1: (q.x, q.y),
+            z: [0, 0],
+            color: p.color,
+            style: LineStyle::SOLID,
+            antialias,
+        };
+        out[i] = Command::Line {
+            line,
+            state: State::new(0),
+        };
+        i += 1;
+    }
+    out
+}
+
+/// Line steps (pixels along the major axis) of line commands: what line
+/// costs are divided by.
+pub fn line_steps(cmds: &[Command]) -> u64 {
+    cmds.iter()
+        .map(|c| {
+            if let Command::Line { line, .. } = c {
+                line.steps() as u64
+            } else {
+                0
+            }
+        })
+        .sum()
+}
+
+/// Ticks to draw the lines with `embedded-graphics`' own 1-pixel `Line`
+/// (endpoints rounded to whole pixels) onto the tile as a `DrawTarget`.
+pub fn eg_lines<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither>(
+    tile: &mut Tile<N, F, Z, W, D>,
+    cmds: &[Command],
+    clock: &mut impl Clock,
+) -> Result<u64, Error> {
+    use embedded_graphics::primitives::Line;
+    tile.begin(Rect::new(0, 0, SIDE, SIDE), &Clear::default())?;
+    let px = |c: Coord| c.round().to_num::<i32>();
+    clock.lap();
+    for c in cmds {
+        if let Command::Line { line: l, .. } = c {
+            let color = F::to_color(F::pack_rgb(l.color));
+            let (a, b) = (
+                Point::new(px(l.p0.0), px(l.p0.1)),
+                Point::new(px(l.p1.0), px(l.p1.1)),
+            );
+            let _ = Line::new(a, b)
+                .into_styled(PrimitiveStyle::with_stroke(color, 1))
+                .draw(tile);
+        }
+    }
+    Ok(clock.lap() as u64)
+}
 
 const fn triangles() -> [Command; TRIANGLES] {
     let mut rng = Rng::new(0x7173_7261_7374_6c69);
