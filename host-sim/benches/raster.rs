@@ -101,7 +101,9 @@ fn raster(c: &mut Criterion) {
         g.throughput(Throughput::Elements(steps));
         let mut tile: Box<Base<Rgb565Format, NoDepth, NoWid, NoDither>> = Box::default();
         g.bench_function(BenchmarkId::from_parameter("eg_line_rgb565"), |b| {
-            b.iter(|| workloads::eg_lines(&mut tile, black_box(&LINE_CMDS), &mut || 0).unwrap())
+            b.iter(|| {
+                workloads::eg_primitives(&mut tile, black_box(&LINE_CMDS), &mut || 0).unwrap()
+            })
         });
         g.finish();
     }

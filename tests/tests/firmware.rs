@@ -240,6 +240,23 @@ struct BoardResult {
     minimal_stack: u64,
 }
 
+/// Markdown rows: for each `(label, bench, elements)`, every board's
+/// instructions per element.
+fn table_rows(boards: &[&Report], rows: &[(&str, &str, u64)]) -> String {
+    let mut md = String::new();
+    for (label, key, n) in rows {
+        md += &format!("| {label} |");
+        for b in boards {
+            md += &format!(
+                " {:.1} |",
+                b.benches[*key] as f64 * b.instr_per_tick / *n as f64
+            );
+        }
+        md += "\n";
+    }
+    md
+}
+
 fn report(reports: &[BoardResult]) -> String {
     let tri_px = workloads::covered_pixels(&TRIANGLE_CMDS, workloads::SIDE).unwrap();
     let fill_px = workloads::covered_pixels(&FILL_CMDS, workloads::SIDE).unwrap();
@@ -283,16 +300,7 @@ fn report(reports: &[BoardResult]) -> String {
             eg_px,
         ),
     ];
-    for (label, key, px) in rows {
-        md += &format!("| {label} |");
-        for b in &boards {
-            md += &format!(
-                " {:.1} |",
-                b.benches[key] as f64 * b.instr_per_tick / px as f64
-            );
-        }
-        md += "\n";
-    }
+    md += &table_rows(&boards, &rows);
     md += "| **ratio** embedded-graphics flat / ours Gouraud |";
     for b in &boards {
         let ours = b.benches["gouraud_rgb565"] as f64 / tri_px as f64;
@@ -314,20 +322,18 @@ fn report(reports: &[BoardResult]) -> String {
     md += " |\n| --- |";
     md += &" ---: |".repeat(boards.len());
     md += "\n";
-    for (label, key) in [
-        ("Bresenham, RGB565", "bresenham_rgb565"),
-        ("two-point (Wu) antialiased, RGB565", "wu_rgb565"),
-        ("embedded-graphics `Line` (1 px stroke)", "eg_line_rgb565"),
-    ] {
-        md += &format!("| {label} |");
-        for b in &boards {
-            md += &format!(
-                " {:.1} |",
-                b.benches[key] as f64 * b.instr_per_tick / steps as f64
-            );
-        }
-        md += "\n";
-    }
+    md += &table_rows(
+        &boards,
+        &[
+            ("Bresenham, RGB565", "bresenham_rgb565", steps),
+            ("two-point (Wu) antialiased, RGB565", "wu_rgb565", steps),
+            (
+                "embedded-graphics `Line` (1 px stroke)",
+                "eg_line_rgb565",
+                steps,
+            ),
+        ],
+    );
     md += "\n\n## Whole frames\n\n| board | scene | tile | raster instr/px | flush instr/px | total instr/frame | CRC |\n| --- | --- | --- | ---: | ---: | ---: | --- |\n";
     for b in &boards {
         for (name, l) in &b.scenes {

@@ -111,11 +111,9 @@ fn bench_one<F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither>(
 ) -> core::fmt::Result {
     let mut tile: Tile<{ (workloads::SIDE * workloads::SIDE / 8) as usize }, F, Z, W, D> =
         Tile::new();
-    let lines = matches!(cmds.first(), Some(Command::Line { .. }));
-    let ticks = match (via, lines) {
-        (Via::Ours, _) => workloads::draw(&mut tile, cmds, clock),
-        (Via::EmbeddedGraphics, false) => workloads::eg_triangles(&mut tile, cmds, clock),
-        (Via::EmbeddedGraphics, true) => workloads::eg_lines(&mut tile, cmds, clock),
+    let ticks = match via {
+        Via::Ours => workloads::draw(&mut tile, cmds, clock),
+        Via::EmbeddedGraphics => workloads::eg_primitives(&mut tile, cmds, clock),
     };
     match ticks {
         Ok(t) => writeln!(out, "bench {name} ticks {t}"),

@@ -74,32 +74,6 @@ pub fn line_steps(cmds: &[Command]) -> u64 {
         .sum()
 }
 
-/// Ticks to draw the lines with `embedded-graphics`' own 1-pixel `Line`
-/// (endpoints rounded to whole pixels) onto the tile as a `DrawTarget`.
-pub fn eg_lines<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither>(
-    tile: &mut Tile<N, F, Z, W, D>,
-    cmds: &[Command],
-    clock: &mut impl Clock,
-) -> Result<u64, Error> {
-    use embedded_graphics::primitives::Line;
-    tile.begin(Rect::new(0, 0, SIDE, SIDE), &Clear::default())?;
-    let px = |c: Coord| c.round().to_num::<i32>();
-    clock.lap();
-    for c in cmds {
-        if let Command::Line { line: l, .. } = c {
-            let color = F::to_color(F::pack_rgb(l.color));
-            let (a, b) = (
-                Point::new(px(l.p0.0), px(l.p0.1)),
-                Point::new(px(l.p1.0), px(l.p1.1)),
-            );
-            let _ = Line::new(a, b)
-                .into_styled(PrimitiveStyle::with_stroke(color, 1))
-                .draw(tile);
-        }
-    }
-    Ok(clock.lap() as u64)
-}
-
 const fn triangles() -> [Command; TRIANGLES] {
     let mut rng = Rng::new(0x7173_7261_7374_6c69);
     let side = SIDE as i64 * 16;
@@ -154,25 +128,34 @@ pub fn draw<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither>
     Ok(clock.lap() as u64)
 }
 
-/// Ticks to fill the same triangles, flat-coloured (first vertex's colour,
-/// vertices rounded to whole pixels), with `embedded-graphics`' own
-/// `Triangle` drawn onto the tile as a `DrawTarget`.
-pub fn eg_triangles<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither>(
+/// Ticks to draw the same commands with `embedded-graphics`' own
+/// primitives onto the tile as a `DrawTarget`: each triangle as a flat
+/// `Triangle` fill (first vertex's colour), each line as a 1-pixel `Line`;
+/// vertices rounded to whole pixels.
+pub fn eg_primitives<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither>(
     tile: &mut Tile<N, F, Z, W, D>,
     cmds: &[Command],
     clock: &mut impl Clock,
 ) -> Result<u64, Error> {
+    use embedded_graphics::primitives::Line;
     tile.begin(Rect::new(0, 0, SIDE, SIDE), &Clear::default())?;
-    let px = |c: Coord| c.round().to_num::<i32>();
+    let px =
+        |(x, y): (Coord, Coord)| Point::new(x.round().to_num::<i32>(), y.round().to_num::<i32>());
+    let color = |c: Rgb| F::to_color(F::pack_rgb(c));
     clock.lap();
     for c in cmds {
-        if let Command::Triangle { v, .. } = c {
-            let color = F::to_color(F::pack_rgb(v[0].color));
-            let [a, b, d] = v.map(|v| Point::new(px(v.x), px(v.y)));
-            let _ = Triangle::new(a, b, d)
-                .into_styled(PrimitiveStyle::with_fill(color))
-                .draw(tile);
-        }
+        let _ = match c {
+            Command::Triangle { v, .. } => {
+                let [a, b, d] = v.map(|v| px((v.x, v.y)));
+                Triangle::new(a, b, d)
+                    .into_styled(PrimitiveStyle::with_fill(color(v[0].color)))
+                    .draw(tile)
+            }
+            Command::Line { line: l, .. } => Line::new(px(l.p0), px(l.p1))
+                .into_styled(PrimitiveStyle::with_stroke(color(l.color), 1))
+                .draw(tile),
+            _ => Ok(()),
+        };
     }
     Ok(clock.lap() as u64)
 }
@@ -232,7 +215,7 @@ impl DrawTarget for Counter {
     }
 }
 
-/// Pixels `embedded-graphics` fills for the triangles in [`eg_triangles`].
+/// Pixels `embedded-graphics` fills for the triangles in [`eg_primitives`].
 pub fn eg_covered_pixels(cmds: &[Command]) -> u64 {
     let mut c = Counter(0);
     let px = |c: Coord| c.round().to_num::<i32>();
