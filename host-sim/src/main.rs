@@ -17,6 +17,15 @@ struct Cli {
     cmd: Cmd,
 }
 
+/// Line antialiasing modes.
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum LineAa {
+    /// Bresenham.
+    Off,
+    /// Two-point (Wu).
+    Wu,
+}
+
 #[derive(Subcommand)]
 enum Cmd {
     /// Render a scene tile by tile with the fixed-point core.
@@ -29,6 +38,9 @@ enum Cmd {
         /// Also write the f64 reference render here and print the difference.
         #[arg(long)]
         reference: Option<PathBuf>,
+        /// Override every line's antialiasing: `wu` (two-point) or `off` (Bresenham).
+        #[arg(long, value_enum)]
+        line_aa: Option<LineAa>,
     },
     /// Render a scene with the f64 reference renderer.
     Reference {
@@ -61,8 +73,12 @@ fn run(cli: Cli) -> Result<(), String> {
             scene,
             output,
             reference: ref_out,
+            line_aa,
         } => {
-            let s = Scene::load(&scene)?;
+            let mut s = Scene::load(&scene)?;
+            if let Some(mode) = line_aa {
+                s.set_line_aa(matches!(mode, LineAa::Wu));
+            }
             let c = &s.config;
             let r = render(c, &s.commands).map_err(|e| e.to_string())?;
             println!("scene      {}", scene.display());

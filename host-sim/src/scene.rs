@@ -508,6 +508,15 @@ impl Scene {
 }
 
 impl Scene {
+    /// Overrides every line's mode: two-point (Wu) antialiased or Bresenham.
+    pub fn set_line_aa(&mut self, antialias: bool) {
+        for c in &mut self.commands {
+            if let Command::Line { line, .. } = c {
+                line.antialias = antialias;
+            }
+        }
+    }
+
     /// The wire-format header of this scene (`tilerast::wire`).
     pub fn header(&self) -> tilerast::wire::SceneHeader {
         let c = &self.config;
@@ -596,6 +605,21 @@ mod tests {
         assert!(e.starts_with("2: "), "{e}");
         let e = err("\n[[command]]\nkind = \"span\"\nx = 0\ny = 0\nlen = 300\nrgb = [0, 0, 0]\ndrgb = [1, 0, 0]\n");
         assert!(e.starts_with("6: ") && e.contains("span"), "{e}");
+    }
+
+    #[test]
+    fn line_aa_override_switches_every_line() {
+        let src = format!("{HEAD}[[command]]\nkind = \"polyline\"\npoints = [[1, 1], [9, 3], [2, 7]]\nrgb = [9, 9, 9]\n");
+        let mut s = Scene::parse(&src, Path::new(".")).unwrap();
+        let aa = |s: &Scene| {
+            s.commands
+                .iter()
+                .map(|c| matches!(c, Command::Line { line, .. } if line.antialias))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(aa(&s), [false, false]);
+        s.set_line_aa(true);
+        assert_eq!(aa(&s), [true, true]);
     }
 
     #[test]
