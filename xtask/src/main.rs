@@ -122,9 +122,10 @@ fn ensure_qemu() -> Result<(), String> {
     } else {
         vec!["sudo"]
     };
+    // No terminal in CI: never let debconf ask.
     let apt = |args: &[&str]| {
         let mut all = sudo.clone();
-        all.push("apt-get");
+        all.extend_from_slice(&["env", "DEBIAN_FRONTEND=noninteractive", "apt-get"]);
         all.extend_from_slice(args);
         run(all[0], &all[1..])
     };
