@@ -1,6 +1,7 @@
 //! Commands (pipeline stage 1): what the geometry side sends to the raster
-//! engine, like REjr's instruction FIFO — spans, triangles, area fills, Z
-//! fills and window-ID fills, each with its per-command [`State`].
+//! engine, like REjr's instruction FIFO — spans, triangles, lines,
+//! antialiased solid edges, area fills, Z fills and window-ID fills, each
+//! with its per-command [`State`].
 
 use crate::error::Error;
 use crate::format::Rgb;
@@ -194,6 +195,14 @@ pub enum Command {
         /// Window ID and plane mask.
         state: State,
     },
+    /// An antialiased edge of a solid, blended after the solids are drawn
+    /// (seed 003 eq. 8; see [`crate::line::EdgeCmd`]).
+    Edge {
+        /// The edge.
+        edge: crate::line::EdgeCmd,
+        /// Window ID and plane mask.
+        state: State,
+    },
     /// Area fill with a flat colour: window-ID test and plane mask, no Z, no dither.
     Fill {
         /// Pixels to fill (clipped to the screen).
@@ -228,6 +237,7 @@ impl Command {
             Command::Triangle { v, .. } => v.iter().try_for_each(Vertex::validate),
             Command::Span { span, .. } => span.validate(),
             Command::Line { line, .. } => line.validate(),
+            Command::Edge { edge, .. } => edge.validate(),
             _ => Ok(()),
         }
     }
@@ -241,6 +251,7 @@ impl Command {
             }
             Command::Span { .. } => None,
             Command::Line { line, .. } => line.bounds(),
+            Command::Edge { edge, .. } => edge.bounds(),
             Command::Fill { rect, .. }
             | Command::ZFill { rect, .. }
             | Command::WidFill { rect, .. } => (rect.w > 0 && rect.h > 0).then_some(*rect),

@@ -23,7 +23,8 @@
 use crate::error::Error;
 use crate::format::Rgb;
 use crate::geom::Rect;
-use crate::numeric::{div_floor, Coord, COORD_LIMIT, SUBPIXEL, Z_FRAC};
+use crate::command::Vertex;
+use crate::numeric::{div_floor, Coord, SUBPIXEL, Z_FRAC};
 use crate::traverse::FloorWalk;
 
 /// A repeating on/off pattern: 16 bits, each held for `scale` pixels.
@@ -122,27 +123,136 @@ fn sub(c: (Coord, Coord)) -> (i64, i64) {
 impl LineCmd {
     /// Checks the coordinate domain.
     pub fn validate(&self) -> Result<(), Error> {
-        let lim = COORD_LIMIT as i64 * SUBPIXEL;
-        let ok = |c: (Coord, Coord)| {
-            let (x, y) = sub(c);
-            (-lim..lim).contains(&x) && (-lim..lim).contains(&y)
-        };
-        if ok(self.p0) && ok(self.p1) {
-            Ok(())
-        } else {
-            Err(Error::CoordOutOfRange)
-        }
+        let p = |(x, y)| Vertex::new(x, y, 0, Rgb::default());
+        p(self.p0).validate()?;
+        p(self.p1).validate()
     }
 
     pub(crate) fn setup(&self) -> Option<LineSetup> {
-        let (p, q) = (sub(self.p0), sub(self.p1));
+        LineSetup::new(self.p0, self.p1, self.z)
+    }
+
+    /// Pixels the line steps through (drawn or not by the style): what a
+    /// polyline adds to the phase of its next segment.
+    pub fn steps(&self) -> u32 {
+        self.setup().map_or(0, |s| {
+            let (first, last) = s.columns(self.antialias);
+            (last - first + 1).max(0) as u32
+        })
+    }
+
+    /// The style phase for a segment that continues this one.
+    pub fn next_phase(&self) -> u16 {
+        let period = 16 * self.style.scale.max(1) as u32;
+        ((self.style.phase as u32 + self.steps()) % period) as u16
+    }
+
+    /// The screen pixels the line can touch.
+    pub fn bounds(&self) -> Option<Rect> {
+        self.setup()?.bounds(self.antialias)
+    }
+}
+
+/// Which side of an edge the solid lies on, walking from its first vertex
+/// to its second on the y-down screen: `Right` when
+/// `cross(p1 - p0, q - p0) > 0` for a point `q` inside.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Side {
+    /// The solid is on the left (counter-clockwise side on screen).
+    Left,
+    /// The solid is on the right (clockwise side on screen).
+    Right,
+}
+
+/// An antialiased edge of a solid (seed 003 eq. 8), drawn **after** the
+/// solids: along the edge, the pixel outside the solid that the edge crosses
+/// is blended toward the solid's colour by the part of it the solid covers,
+/// `I = d I_o + (1 - d) I_b`. The pixel inside (drawn by the solid) is left
+/// alone, as in the seed.
+///
+/// `I_o` is interpolated from the vertex colours along the edge (so the
+/// result does not depend on which tile holds the solid's pixels); `I_b` is
+/// whatever the tile holds. The blend is Z-tested against the edge's depth
+/// without writing Z, so a nearer object next to the edge is not touched.
+///
+/// Emit edges only where the solid borders something else — a mesh's
+/// silhouette and open boundary — not between two triangles of one surface.
+///
+/// ```
+/// use tilerast::prelude::*;
+/// use tilerast::line::{EdgeCmd, Side};
+/// let v = |x: f32, y: f32| Vertex::new(Coord::from_num(x), Coord::from_num(y), 0, Rgb::new(255, 255, 255));
+/// let tri = [v(1.0, 1.0), v(30.0, 9.0), v(5.0, 20.0)];
+/// let e = EdgeCmd::of_triangle(&tri, 0); // from tri[0] to tri[1], tri[2] inside
+/// assert_eq!(e.interior, Side::Right);
+/// assert_eq!(EdgeCmd::of_triangle(&[tri[0], tri[2], tri[1]], 0).interior, Side::Left);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct EdgeCmd {
+    /// The edge's end points, with the solid's depth and colour there.
+    pub v: [Vertex; 2],
+    /// The solid's side.
+    pub interior: Side,
+}
+
+impl EdgeCmd {
+    /// Edge `i` of a triangle, from `v[i]` to `v[(i + 1) % 3]`, with the
+    /// third vertex inside (a degenerate triangle gives `Side::Left`).
+    pub fn of_triangle(v: &[Vertex; 3], i: usize) -> EdgeCmd {
+        let (a, b, q) = (v[i % 3], v[(i + 1) % 3], v[(i + 2) % 3]);
+        let p = |v: Vertex| (v.x.to_bits() as i64, v.y.to_bits() as i64);
+        let (a, b_, q_) = (p(a), p(b), p(q));
+        let cross = (b_.0 - a.0) * (q_.1 - a.1) - (b_.1 - a.1) * (q_.0 - a.0);
+        EdgeCmd {
+            v: [v[i % 3], b],
+            interior: if cross > 0 { Side::Right } else { Side::Left },
+        }
+    }
+
+    /// Checks the coordinate domain.
+    pub fn validate(&self) -> Result<(), Error> {
+        self.v.iter().try_for_each(Vertex::validate)
+    }
+
+    pub(crate) fn setup(&self) -> Option<LineSetup> {
+        let [p, q] = self.v.map(|v| (v.x, v.y));
+        LineSetup::new(p, q, self.v.map(|v| v.z))
+    }
+
+    /// Whether the solid lies towards larger minor coordinates of `s`.
+    pub(crate) fn interior_up(&self, s: &LineSetup) -> bool {
+        let d = |f: fn(&Vertex) -> Coord| f(&self.v[1]).to_bits() - f(&self.v[0]).to_bits();
+        // Moving q along +y changes cross(p1 - p0, q - p0) by dx, along +x by -dy.
+        let right_is_up = if s.y_major {
+            d(|v| v.y) < 0
+        } else {
+            d(|v| v.x) > 0
+        };
+        right_is_up == (self.interior == Side::Right)
+    }
+
+    /// The screen pixels the edge can touch.
+    pub fn bounds(&self) -> Option<Rect> {
+        self.setup()?.bounds(true)
+    }
+}
+
+/// Weights of the two-point antialiased pixels are in 1/256.
+pub(crate) const WU_ONE: i32 = 256;
+
+impl LineSetup {
+    /// The walk of the segment `p0` to `p1` with depths `z`; `None` when
+    /// it has no extent along its major axis.
+    pub(crate) fn new(p0: (Coord, Coord), p1: (Coord, Coord), z: [u16; 2]) -> Option<LineSetup> {
+        let (p, q) = (sub(p0), sub(p1));
         let y_major = (q.1 - p.1).abs() > (q.0 - p.0).abs();
         let (mut pa, mut pb) = if y_major {
             ((p.1, p.0), (q.1, q.0))
         } else {
             (p, q)
         };
-        let (mut z0, mut z1) = (self.z[0] as i64, self.z[1] as i64);
+        let (mut z0, mut z1) = (z[0] as i64, z[1] as i64);
         let reversed = pb.0 < pa.0;
         if reversed {
             core::mem::swap(&mut pa, &mut pb);
@@ -181,44 +291,25 @@ impl LineCmd {
         })
     }
 
-    /// Pixels the line steps through (drawn or not by the style): what a
-    /// polyline adds to the phase of its next segment.
-    pub fn steps(&self) -> u32 {
-        self.setup().map_or(0, |s| {
-            let (first, last) = s.columns(self.antialias);
-            (last - first + 1).max(0) as u32
-        })
-    }
-
-    /// The style phase for a segment that continues this one.
-    pub fn next_phase(&self) -> u16 {
-        let period = 16 * self.style.scale.max(1) as u32;
-        ((self.style.phase as u32 + self.steps()) % period) as u16
-    }
-
-    /// The screen pixels the line can touch.
-    pub fn bounds(&self) -> Option<Rect> {
-        let s = self.setup()?;
-        let (first, last) = s.columns(self.antialias);
+    /// The screen pixels the walk can touch: the columns it steps through
+    /// and, across them, the pixels containing the line (and for the
+    /// two-point walk, one more on each side).
+    pub(crate) fn bounds(&self, antialias: bool) -> Option<Rect> {
+        let (first, last) = self.columns(antialias);
         if first > last {
             return None;
         }
-        // Wu also touches the pixel after the one containing the line.
-        let lo = div_floor(s.m0.min(s.m0 + s.dm), SUBPIXEL) - self.antialias as i64;
-        let hi = div_floor(s.m0.max(s.m0 + s.dm), SUBPIXEL) + self.antialias as i64;
+        let (m0, m1) = (self.m0, self.m0 + self.dm);
+        let lo = div_floor(m0.min(m1), SUBPIXEL) - antialias as i64;
+        let hi = div_floor(m0.max(m1), SUBPIXEL) + antialias as i64;
         let (w, h) = ((last - first + 1) as u32, (hi - lo + 1) as u32);
-        Some(if s.y_major {
+        Some(if self.y_major {
             Rect::new(lo as i32, first as i32, h, w)
         } else {
             Rect::new(first as i32, lo as i32, w, h)
         })
     }
-}
 
-/// Weights of the two-point antialiased pixels are in 1/256.
-pub(crate) const WU_ONE: i32 = 256;
-
-impl LineSetup {
     /// First and last pixel along the major axis: those whose centre lies
     /// in the line (Bresenham), or whose cell it touches (Wu, which weights
     /// the end cells by their coverage).
@@ -228,6 +319,21 @@ impl LineSetup {
         } else {
             (self.first, self.last)
         }
+    }
+
+    /// `[at p0, at p1]` reordered to `[at a, at b]`, the walk's direction.
+    pub(crate) fn ends<T>(&self, [p, q]: [T; 2]) -> [T; 2] {
+        if self.reversed {
+            [q, p]
+        } else {
+            [p, q]
+        }
+    }
+
+    /// Length along the major axis (sub-pixels, positive) and the offset of
+    /// the first two-point column's centre from `a`.
+    pub(crate) fn extent(&self) -> (i64, i64) {
+        (self.b - self.a, self.centre(self.columns(true).0))
     }
 
     /// Offset of column `c`'s centre from `a`, in sub-pixels.
@@ -274,18 +380,13 @@ impl LineSetup {
         }
     }
 
-    /// Two-point antialiasing (seed 003, eqs. 4 and 7): for each column in
-    /// `lo..hi` the line touches, calls `f(k, major, minor, w0, w1, z)` for
-    /// the pixels `minor` and `minor + 1` straddling the line at the column
-    /// centre, with weights `w0 + w1` equal to the column's coverage along
-    /// the major axis ([`WU_ONE`] inside, less at the end cells), split by
-    /// the distance `D` to pixel `minor`'s centre: `w1 = D cov`, `w0 = cov - w1`.
-    pub(crate) fn walk_wu(
-        &self,
-        lo: i64,
-        hi: i64,
-        mut f: impl FnMut(u32, i64, i64, i32, i32, i32),
-    ) {
+    /// The cells of the two-point walk: for each column in `lo..hi` the
+    /// line's extent touches, calls `f(k, major, u, cover, z)` with `k` the
+    /// column's index from the start point, `u` the exact line position at
+    /// the column centre in pixel-centre units of 1/256 (floor), `cover` the
+    /// part of the column's cell inside the extent (in 1/256) and `z` the
+    /// depth in 16.14.
+    fn walk_cells(&self, lo: i64, hi: i64, mut f: impl FnMut(u32, i64, i64, i32, i32)) {
         let (first, last) = self.columns(true);
         let (c0, c1) = (first.max(lo), (last + 1).min(hi));
         if c0 >= c1 {
@@ -305,11 +406,56 @@ impl LineSetup {
             let cell =
                 (self.b.min(SUBPIXEL * c + SUBPIXEL) - self.a.max(SUBPIXEL * c)).clamp(0, SUBPIXEL);
             let cover = cell as i32 * WU_ONE / SUBPIXEL as i32;
-            let d = (u.q & 255) as i32;
-            let w1 = (d * cover) >> 8;
-            f(k as u32, c, u.q >> 8, cover - w1, w1, z.q as i32);
+            f(k as u32, c, u.q, cover, z.q as i32);
             u.next();
             z.next();
         }
+    }
+
+    /// Two-point antialiasing (seed 003, eqs. 4 and 7): for each column in
+    /// `lo..hi` the line touches, calls `f(k, major, minor, w0, w1, z)` for
+    /// the pixels `minor` and `minor + 1` straddling the line at the column
+    /// centre, with weights `w0 + w1` equal to the column's coverage along
+    /// the major axis ([`WU_ONE`] inside, less at the end cells), split by
+    /// the distance `D` to pixel `minor`'s centre: `w1 = D cov`, `w0 = cov - w1`.
+    pub(crate) fn walk_wu(
+        &self,
+        lo: i64,
+        hi: i64,
+        mut f: impl FnMut(u32, i64, i64, i32, i32, i32),
+    ) {
+        self.walk_cells(lo, hi, |k, c, u, cover, z| {
+            let w1 = ((u & 255) as i32 * cover) >> 8;
+            f(k, c, u >> 8, cover - w1, w1, z);
+        });
+    }
+
+    /// Edge antialiasing (seed 003 eq. 8): for each column in `lo..hi` the
+    /// edge touches, calls `f(major, minor, w, k, z)` for the one pixel outside
+    /// the solid whose cell the edge crosses, if any. `w` (in 1/256) is the
+    /// part of that pixel on the solid's side: with `D` the two-point
+    /// distance, `1/2 - D` when the solid lies towards larger minor
+    /// coordinates (`up`), else `D - 1/2`, times the column's coverage; `k`
+    /// is the column's index from the first column of the walk.
+    pub(crate) fn walk_edge(
+        &self,
+        up: bool,
+        lo: i64,
+        hi: i64,
+        mut f: impl FnMut(i64, i64, i32, i64, i32),
+    ) {
+        let half = WU_ONE / 2;
+        let first = self.columns(true).0;
+        self.walk_cells(lo, hi, |_, c, u, cover, z| {
+            let d = (u & 255) as i32;
+            let (m, part) = if up {
+                (u >> 8, half - d)
+            } else {
+                (1 + (u >> 8), d - half)
+            };
+            if part > 0 {
+                f(c, m, (part * cover) >> 8, c - first, z);
+            }
+        });
     }
 }

@@ -14,7 +14,7 @@ use crate::format::{ColorPlane, Lanes, PixelFormat, Rgb};
 use crate::fragment::{DepthMode, DepthPlane, NoDepth, NoWid, WidMode, WidPlane};
 use crate::frame::Clear;
 use crate::geom::Rect;
-use crate::numeric::{z_to_u16, COLOR_FRAC, Z_FRAC};
+use crate::numeric::{z_to_u16, COLOR_FRAC, SUBPIXEL as SUBPIXEL_I64, Z_FRAC};
 use crate::setup::TriangleSetup;
 use crate::span::SpanStart;
 use crate::traverse::for_each_span;
@@ -136,6 +136,7 @@ impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Tile<N
             }
             Command::Span { span, state } => self.span_cmd(span, state),
             Command::Line { line, state } => self.line(line, state),
+            Command::Edge { edge, state } => self.edge(edge, state),
             Command::Fill { rect, color, state } => self.fill(rect, *color, state),
             Command::ZFill { rect, z, state } => {
                 let wid = state.wid;
@@ -204,6 +205,51 @@ impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Tile<N
                 }
             });
         }
+    }
+
+    /// Edge antialiasing (seed 003 eq. 8): the outside pixel along the
+    /// edge gets `I_b + (I_o - I_b) d` through [`Self::blend`], with `I_o`
+    /// interpolated along the edge's major axis from the vertex colours.
+    /// The colour DDA starts at the edge's first column whatever the tile
+    /// (so tiling cannot change it) and is clamped to the two vertex colours,
+    /// which the end columns' centres may lie beyond.
+    fn edge(&mut self, e: &crate::line::EdgeCmd, st: &State) {
+        let Some(s) = e.setup() else { return };
+        let a = self.area;
+        let (lo, hi, mlo, mhi) = if s.y_major {
+            (a.y as i64, a.y1(), a.x as i64, a.x1())
+        } else {
+            (a.x as i64, a.x1(), a.y as i64, a.y1())
+        };
+        let lanes = |c: crate::format::Rgb| {
+            F::lanes_from_rgb([c.r as i64, c.g as i64, c.b as i64].map(|v| v << COLOR_FRAC))
+        };
+        let [ca, cb] = s.ends(e.v.map(|v| lanes(v.color)));
+        let (len, t0) = s.extent();
+        // Colour at the first column's centre, t0 sub-pixels from a, and its
+        // step per column: |cb - ca| < 2^24, so products stay below 2^42.
+        let c0 = ca.zip(cb, |a, b| {
+            (a as i64 + crate::numeric::div_round(t0 * (b - a) as i64, len)) as i32
+        });
+        let dc = ca.zip(cb, |a, b| {
+            crate::numeric::div_round(SUBPIXEL_I64 * (b - a) as i64, len) as i32
+        });
+        let (cmin, cmax) = (ca.zip(cb, i32::min), ca.zip(cb, i32::max));
+        let up = e.interior_up(&s);
+        s.walk_edge(up, lo, hi, |major, minor, w, k, z| {
+            if (mlo..mhi).contains(&minor) {
+                let c = c0
+                    .zip(dc, |v, d| v.wrapping_add((k as i32).wrapping_mul(d)))
+                    .zip(cmin, i32::max)
+                    .zip(cmax, i32::min);
+                let (x, y) = if s.y_major {
+                    (minor, major)
+                } else {
+                    (major, minor)
+                };
+                self.blend(x, y, c, w, z, st);
+            }
+        });
     }
 
     /// Blends colour `c` (output scale, 16 fraction bits) with weight `w`

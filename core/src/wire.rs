@@ -15,6 +15,8 @@
 //! | 5 | Z fill | `x: i32, y: i32, w: u32, h: u32, z: u16` |
 //! | 6 | window-ID fill | `x: i32, y: i32, w: u32, h: u32` (its `wid` is the ID; no mask) |
 //! | 8 | line | `x0, y0, x1, y1: i32, z0, z1: u16, r, g, b, pattern: u16, scale: u8, phase: u16, antialias: u8` |
+//! | 9 | antialiased solid edge, 32-bit coordinates | 2 x (`x: i32, y: i32, z: u16, r, g, b`), `interior: u8` (0 left, 1 right) |
+//! | 10 | antialiased solid edge, 16-bit coordinates | 2 x (`x: i16, y: i16, z: u16, r, g, b`), `interior: u8` |
 //! | 7 | indexed mesh: triangles sharing vertices | `nv: u16, nt: u16`, `nv` x (`x: i16, y: i16, z: u16, r, g, b`), `nt` x 3 x `u16` index |
 //!
 //! A mesh record replays as its `nt` triangles, in order, each with the
@@ -27,7 +29,7 @@ use crate::command::{Command, SpanCmd, State, Vertex};
 use crate::error::Error;
 use crate::format::Rgb;
 use crate::geom::Rect;
-use crate::line::{LineCmd, LineStyle};
+use crate::line::{EdgeCmd, LineCmd, LineStyle, Side};
 use crate::numeric::{ColorFix, ColorStep, Coord, ZFix, ZStep};
 
 const MASK_FLAG: u8 = 0x80;
@@ -50,6 +52,19 @@ impl Writer<'_> {
             self.put(&st.plane_mask.to_le_bytes())?;
         }
         Ok(())
+    }
+
+    /// A vertex: `x, y` as `i16` (`small`) or `i32` sub-pixels, `z`, colour.
+    fn vertex(&mut self, v: &Vertex, small: bool) -> Result<(), Error> {
+        if small {
+            self.put(&(v.x.to_bits() as i16).to_le_bytes())?;
+            self.put(&(v.y.to_bits() as i16).to_le_bytes())?;
+        } else {
+            self.put(&v.x.to_bits().to_le_bytes())?;
+            self.put(&v.y.to_bits().to_le_bytes())?;
+        }
+        self.put(&v.z.to_le_bytes())?;
+        self.put(&[v.color.r, v.color.g, v.color.b])
     }
 
     fn put(&mut self, bytes: &[u8]) -> Result<(), Error> {
@@ -93,6 +108,19 @@ impl Reader<'_> {
     fn i32(&mut self) -> Result<i32, Error> {
         self.take().map(i32::from_le_bytes)
     }
+    fn vertex(&mut self, small: bool) -> Result<Vertex, Error> {
+        let (x, y) = if small {
+            (self.i16()? as i32, self.i16()? as i32)
+        } else {
+            (self.i32()?, self.i32()?)
+        };
+        Ok(Vertex::new(
+            Coord::from_bits(x),
+            Coord::from_bits(y),
+            self.u16()?,
+            self.rgb()?,
+        ))
+    }
     fn rgb(&mut self) -> Result<Rgb, Error> {
         let [r, g, b] = self.take()?;
         Ok(Rgb::new(r, g, b))
@@ -125,6 +153,11 @@ fn rect_bytes(w: &mut Writer<'_>, r: &Rect) -> Result<(), Error> {
     w.put(&r.h.to_le_bytes())
 }
 
+/// Whether a vertex fits the 16-bit coordinate encoding.
+fn small(v: &Vertex) -> bool {
+    i16::try_from(v.x.to_bits()).is_ok() && i16::try_from(v.y.to_bits()).is_ok()
+}
+
 /// Encodes one command into `buf`, returning the bytes written.
 ///
 /// ```
@@ -140,21 +173,19 @@ pub fn encode(cmd: &Command, buf: &mut [u8]) -> Result<usize, Error> {
     let mut w = Writer { buf, pos: 0 };
     match cmd {
         Command::Triangle { v, state } => {
-            let small = v.iter().all(|v| {
-                i16::try_from(v.x.to_bits()).is_ok() && i16::try_from(v.y.to_bits()).is_ok()
-            });
+            let small = v.iter().all(small);
             w.head(if small { 2 } else { 1 }, state)?;
             for v in v {
-                if small {
-                    w.put(&(v.x.to_bits() as i16).to_le_bytes())?;
-                    w.put(&(v.y.to_bits() as i16).to_le_bytes())?;
-                } else {
-                    w.put(&v.x.to_bits().to_le_bytes())?;
-                    w.put(&v.y.to_bits().to_le_bytes())?;
-                }
-                w.put(&v.z.to_le_bytes())?;
-                w.put(&[v.color.r, v.color.g, v.color.b])?;
+                w.vertex(v, small)?;
             }
+        }
+        Command::Edge { edge, state } => {
+            let small = edge.v.iter().all(small);
+            w.head(if small { 10 } else { 9 }, state)?;
+            for v in &edge.v {
+                w.vertex(v, small)?;
+            }
+            w.put(&[(edge.interior == Side::Right) as u8])?;
         }
         Command::Span { span: s, state } => {
             w.head(3, state)?;
@@ -209,16 +240,20 @@ pub fn decode(buf: &[u8]) -> Result<(Command, usize), Error> {
     let (tag, state) = r.head()?;
     let cmd = match tag & !MASK_FLAG {
         t @ (1 | 2) => {
-            let mut v = [Vertex::default(); 3];
-            for v in &mut v {
-                let (x, y) = if t == 2 {
-                    (r.i16()? as i32, r.i16()? as i32)
-                } else {
-                    (r.i32()?, r.i32()?)
-                };
-                *v = Vertex::new(Coord::from_bits(x), Coord::from_bits(y), r.u16()?, r.rgb()?);
-            }
+            let v = [r.vertex(t == 2)?, r.vertex(t == 2)?, r.vertex(t == 2)?];
             Command::Triangle { v, state }
+        }
+        t @ (9 | 10) => {
+            let v = [r.vertex(t == 10)?, r.vertex(t == 10)?];
+            let interior = match r.u8()? {
+                0 => Side::Left,
+                1 => Side::Right,
+                _ => return Err(Error::Malformed),
+            };
+            Command::Edge {
+                edge: EdgeCmd { v, interior },
+                state,
+            }
         }
         3 => {
             let (x, y, len) = (r.i32()?, r.i32()?, r.u16()?);
@@ -316,12 +351,10 @@ pub fn encode_mesh(
     w.put(&nv.to_le_bytes())?;
     w.put(&nt.to_le_bytes())?;
     for v in vertices {
-        let x = i16::try_from(v.x.to_bits()).map_err(|_| Error::CoordOutOfRange)?;
-        let y = i16::try_from(v.y.to_bits()).map_err(|_| Error::CoordOutOfRange)?;
-        w.put(&x.to_le_bytes())?;
-        w.put(&y.to_le_bytes())?;
-        w.put(&v.z.to_le_bytes())?;
-        w.put(&[v.color.r, v.color.g, v.color.b])?;
+        if !small(v) {
+            return Err(Error::CoordOutOfRange);
+        }
+        w.vertex(v, true)?;
     }
     for t in tris {
         if t.iter().any(|&i| i >= nv) {
@@ -352,13 +385,7 @@ impl MeshCursor<'_> {
                 .ok_or(Error::Malformed)?,
             pos: 0,
         };
-        let (x, y) = (r.i16()? as i32, r.i16()? as i32);
-        Ok(Vertex::new(
-            Coord::from_bits(x),
-            Coord::from_bits(y),
-            r.u16()?,
-            r.rgb()?,
-        ))
+        r.vertex(true)
     }
 
     /// The next triangle, or `None` when the record is done.

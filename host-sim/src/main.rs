@@ -26,6 +26,15 @@ enum LineAa {
     Wu,
 }
 
+/// A switch.
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum OnOff {
+    /// Off.
+    Off,
+    /// On.
+    On,
+}
+
 #[derive(Subcommand)]
 enum Cmd {
     /// Render a scene tile by tile with the fixed-point core.
@@ -41,11 +50,21 @@ enum Cmd {
         /// Override every line's antialiasing: `wu` (two-point) or `off` (Bresenham).
         #[arg(long, value_enum)]
         line_aa: Option<LineAa>,
+        /// Override edge antialiasing of solids (seed 003 eq. 8) for every
+        /// triangle and mesh: `on` or `off`.
+        #[arg(long, value_enum)]
+        edge_aa: Option<OnOff>,
     },
     /// Render a scene with the f64 reference renderer.
     Reference {
         /// Scene file (TOML).
         scene: PathBuf,
+        /// Supersample the ideal scene with an N x N grid per pixel (box
+        /// filter): lines as 1-pixel-wide rectangles, solids by exact area,
+        /// no edge antialiasing commands. 1 renders the pipeline's own
+        /// semantics (pixel centres, two-point lines, eq. 8 edges).
+        #[arg(long, default_value_t = 1)]
+        samples: u32,
         /// Output PNG.
         #[arg(short, long, default_value = "reference.png")]
         output: PathBuf,
@@ -74,10 +93,14 @@ fn run(cli: Cli) -> Result<(), String> {
             output,
             reference: ref_out,
             line_aa,
+            edge_aa,
         } => {
             let mut s = Scene::load(&scene)?;
             if let Some(mode) = line_aa {
                 s.set_line_aa(matches!(mode, LineAa::Wu));
+            }
+            if let Some(mode) = edge_aa {
+                s.set_edge_aa(matches!(mode, OnOff::On));
             }
             let c = &s.config;
             let r = render(c, &s.commands).map_err(|e| e.to_string())?;
@@ -119,11 +142,18 @@ fn run(cli: Cli) -> Result<(), String> {
                 println!("{}", metrics::compare(&r.image, &img)?);
             }
         }
-        Cmd::Reference { scene, output } => {
+        Cmd::Reference {
+            scene,
+            samples,
+            output,
+        } => {
             let s = Scene::load(&scene)?;
-            reference::render(&s.config, &s.commands)
-                .to_image()
-                .save_png(&output)?;
+            let img = if samples > 1 {
+                reference::supersample(&s.config, &s.commands, samples)
+            } else {
+                reference::render(&s.config, &s.commands)
+            };
+            img.to_image().save_png(&output)?;
             println!("wrote {}", output.display());
         }
         Cmd::Export { scene, output } => {

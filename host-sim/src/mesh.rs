@@ -3,6 +3,7 @@
 //! host (on a device this is the application's job).
 
 use std::path::Path;
+use tilerast::line::{EdgeCmd, Side};
 use tilerast::prelude::*;
 
 /// How a mesh is placed and lit.
@@ -58,6 +59,10 @@ pub struct MeshSpec {
     /// Depth bias of the wireframe, in 16-bit Z units.
     #[serde(default = "default_bias")]
     pub wire_bias: u16,
+    /// Antialias the silhouette and open boundary of the shaded faces
+    /// (seed 003 eq. 8): their edges are drawn after every solid of the scene.
+    #[serde(default)]
+    pub edge_aa: bool,
 }
 
 fn default_true() -> bool {
@@ -99,6 +104,53 @@ pub struct MeshStats {
     pub dropped: usize,
     /// Wireframe edges drawn as lines.
     pub lines: usize,
+    /// Silhouette and boundary edges found for edge antialiasing.
+    pub edges: usize,
+}
+
+/// The edges of a triangle set that border something else on screen: those
+/// of one triangle only (an open boundary) and those whose triangles all lie
+/// on the same side of the edge (a fold: the silhouette). Edges are matched
+/// by their end points' sub-pixel positions, so vertices an OBJ duplicates at
+/// texture seams still join. Degenerate triangles take no part. The edge
+/// gets the first triangle's vertices (colour and depth) and its side.
+pub fn silhouette_edges(tris: &[[Vertex; 3]]) -> Vec<EdgeCmd> {
+    use std::collections::BTreeMap;
+    type Key = (i32, i32);
+    let key = |v: &Vertex| (v.x.to_bits(), v.y.to_bits());
+    // Per undirected edge: the first triangle's edge, and the sides seen.
+    let mut seen: BTreeMap<(Key, Key), (EdgeCmd, bool, bool)> = BTreeMap::new();
+    let mut order = Vec::new();
+    for t in tris {
+        let p = t.map(|v| (v.x.to_bits() as i64, v.y.to_bits() as i64));
+        let area = (p[1].0 - p[0].0) * (p[2].1 - p[0].1) - (p[1].1 - p[0].1) * (p[2].0 - p[0].0);
+        if area == 0 {
+            continue;
+        }
+        for i in 0..3 {
+            let e = EdgeCmd::of_triangle(t, i);
+            let (a, b) = (key(&e.v[0]), key(&e.v[1]));
+            let k = (a.min(b), a.max(b));
+            // The side as seen from the edge's canonical direction.
+            let right = (e.interior == Side::Right) == (a <= b);
+            let entry = seen.entry(k).or_insert_with(|| {
+                order.push(k);
+                (e, false, false)
+            });
+            if right {
+                entry.1 = true;
+            } else {
+                entry.2 = true;
+            }
+        }
+    }
+    order
+        .iter()
+        .filter_map(|k| {
+            let (e, right, left) = seen[k];
+            (right != left).then_some(e)
+        })
+        .collect()
 }
 
 type V3 = [f64; 3];
@@ -130,6 +182,7 @@ pub fn load(
     base: &Path,
     screen: (u16, u16),
     out: &mut Vec<Command>,
+    edges: &mut Vec<Command>,
 ) -> Result<MeshStats, String> {
     let path = base.join(&spec.obj);
     let opts = tobj::LoadOptions {
@@ -180,6 +233,7 @@ pub fn load(
     let [near, far] = spec.clip;
     let light = norm(spec.light);
 
+    let mut solids = Vec::new();
     for m in &models {
         let mesh = &m.mesh;
         let pos: Vec<V3> = mesh
@@ -244,7 +298,7 @@ pub fn load(
             wid: spec.window,
             ..State::default()
         };
-        let mut edges = std::collections::BTreeSet::new();
+        let mut wire = std::collections::BTreeSet::new();
         for t in mesh.indices.chunks_exact(3) {
             stats.triangles += 1;
             match [t[0], t[1], t[2]].map(|i| verts[i as usize]) {
@@ -254,16 +308,17 @@ pub fn load(
                             v: [a, b, c],
                             state,
                         });
+                        solids.push(([a, b, c], state));
                     }
                     for (i, j) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
-                        edges.insert((i.min(j), i.max(j)));
+                        wire.insert((i.min(j), i.max(j)));
                     }
                 }
                 _ => stats.dropped += 1,
             }
         }
         if let Some(rgb) = spec.wireframe {
-            for (i, j) in edges {
+            for (i, j) in wire {
                 let (Some(a), Some(b)) = (verts[i as usize], verts[j as usize]) else {
                     continue;
                 };
@@ -281,6 +336,14 @@ pub fn load(
                 out.push(Command::Line { line, state });
                 stats.lines += 1;
             }
+        }
+    }
+    if spec.edge_aa {
+        let tris: Vec<[Vertex; 3]> = solids.iter().map(|(v, _)| *v).collect();
+        let state = solids.first().map_or(State::default(), |(_, s)| *s);
+        for edge in silhouette_edges(&tris) {
+            edges.push(Command::Edge { edge, state });
+            stats.edges += 1;
         }
     }
     Ok(stats)

@@ -9,6 +9,7 @@
 
 use crate::image::Image;
 use crate::render::Config;
+use tilerast::line::{EdgeCmd, Side};
 use tilerast::prelude::*;
 
 /// An f64 frame: colour on the 0..255 scale (luma replicated for grey
@@ -107,6 +108,7 @@ pub fn render(cfg: &Config, cmds: &[Command]) -> RefFrame {
             }
             Command::Triangle { v, state } => triangle(&mut f, cfg, v, state.wid),
             Command::Line { line, state } => line_ref(&mut f, cfg, line, state.wid),
+            Command::Edge { edge, state } => edge_ref(&mut f, cfg, edge, state.wid),
         }
     }
     if cfg.format.is_gray() {
@@ -192,21 +194,25 @@ fn line_ref(f: &mut RefFrame, cfg: &Config, l: &LineCmd, wid: u8) {
     }
 }
 
-/// Two-point antialiased lines in f64: every column the line's extent
-/// touches along the major axis, weighted by the part of the cell it covers;
-/// the two pixels straddling the exact line at the column centre share that
-/// weight by distance, and are blended over what is there (seed 003 eq. 7),
-/// Z-tested without writing Z.
-fn wu_ref(f: &mut RefFrame, cfg: &Config, l: &LineCmd, wid: u8) {
-    let p = [l.p0, l.p1].map(|(x, y)| (x.to_bits() as f64, y.to_bits() as f64));
+/// The columns of a two-point walk in f64: for every column the segment's
+/// extent touches along the major axis, calls `f(k, column, cover, t, u)`
+/// with `k` the column's index from `p0`, `cover` the part of the column's
+/// cell inside the extent, `t` the column centre's position along the
+/// segment from its walk start (0..1, unclamped) and `u` the exact minor
+/// position in pixel-centre units. Returns whether y is the major axis and
+/// whether the walk runs from `p1` to `p0`.
+fn cells_ref(
+    p0: (Coord, Coord),
+    p1: (Coord, Coord),
+    mut f: impl FnMut(u32, i64, f64, f64, f64),
+) -> (bool, bool) {
+    let p = [p0, p1].map(|(x, y)| (x.to_bits() as f64, y.to_bits() as f64));
     let y_major = (p[1].1 - p[0].1).abs() > (p[1].0 - p[0].0).abs();
     let mm = p.map(|(x, y)| if y_major { (y, x) } else { (x, y) });
     let reversed = mm[1].0 < mm[0].0;
-    let (lo, hi) = if reversed { (1, 0) } else { (0, 1) };
-    let (a, b) = (mm[lo], mm[hi]);
-    let z = [l.z[lo] as f64, l.z[hi] as f64];
+    let (a, b) = if reversed { (mm[1], mm[0]) } else { (mm[0], mm[1]) };
     if a.0 == b.0 {
-        return;
+        return (y_major, reversed);
     }
     let (first, last) = (
         (a.0 / 16.0).floor() as i64,
@@ -214,29 +220,91 @@ fn wu_ref(f: &mut RefFrame, cfg: &Config, l: &LineCmd, wid: u8) {
     );
     for c in first..=last {
         let k = if reversed { last - c } else { c - first } as u32;
-        if !l.style.on(k) {
-            continue;
-        }
         let cell = 16.0 * c as f64;
         let cover = ((b.0.min(cell + 16.0) - a.0.max(cell)) / 16.0).clamp(0.0, 1.0);
         let t = (cell + 8.0 - a.0) / (b.0 - a.0);
         let minor = a.1 + t * (b.1 - a.1);
-        let u = (minor - 8.0) / 16.0;
+        f(k, c, cover, t, (minor - 8.0) / 16.0);
+    }
+    (y_major, reversed)
+}
+
+/// Blends `c` with weight `w` over pixel (major, minor), after the window-ID
+/// and a read-only Z test.
+#[allow(clippy::too_many_arguments)]
+fn blend_ref(
+    f: &mut RefFrame,
+    cfg: &Config,
+    y_major: bool,
+    (major, minor): (i64, i64),
+    c: [f64; 3],
+    w: f64,
+    z: f64,
+    wid: u8,
+) {
+    let (x, y) = if y_major { (minor, major) } else { (major, minor) };
+    if w <= 0.0 || x < 0 || y < 0 || x >= f.width as i64 || y >= f.height as i64 {
+        return;
+    }
+    let i = (y as u32 * f.width + x as u32) as usize;
+    if (cfg.wid && f.wid[i] != wid) || (cfg.depth && z >= f.depth[i]) {
+        return;
+    }
+    f.color[i] = std::array::from_fn(|ch| f.color[i][ch] + (c[ch] - f.color[i][ch]) * w);
+}
+
+/// Two-point antialiased lines in f64: every column the line's extent
+/// touches along the major axis, weighted by the part of the cell it covers;
+/// the two pixels straddling the exact line at the column centre share that
+/// weight by distance, and are blended over what is there (seed 003 eq. 7),
+/// Z-tested without writing Z.
+fn wu_ref(f: &mut RefFrame, cfg: &Config, l: &LineCmd, wid: u8) {
+    let mut cells = Vec::new();
+    let (y_major, reversed) = cells_ref(l.p0, l.p1, |k, c, cover, t, u| {
+        cells.push((k, c, cover, t, u))
+    });
+    let z = if reversed { [l.z[1], l.z[0]] } else { l.z }.map(|z| z as f64);
+    for (k, c, cover, t, u) in cells {
+        if !l.style.on(k) {
+            continue;
+        }
         let r0 = u.floor();
         let w1 = (u - r0) * cover;
         let zc = z[0] + t * (z[1] - z[0]);
         for (r, w) in [(r0 as i64, cover - w1), (r0 as i64 + 1, w1)] {
-            let (x, y) = if y_major { (r, c) } else { (c, r) };
-            if w <= 0.0 || x < 0 || y < 0 || x >= f.width as i64 || y >= f.height as i64 {
-                continue;
-            }
-            let i = (y as u32 * f.width + x as u32) as usize;
-            if (cfg.wid && f.wid[i] != wid) || (cfg.depth && zc >= f.depth[i]) {
-                continue;
-            }
-            let line = rgb(l.color);
-            f.color[i] = std::array::from_fn(|ch| f.color[i][ch] + (line[ch] - f.color[i][ch]) * w);
+            blend_ref(f, cfg, y_major, (c, r), rgb(l.color), w, zc, wid);
         }
+    }
+}
+
+/// Edge antialiasing in f64 (seed 003 eq. 8): in every column, the pixel
+/// outside the solid whose cell the exact edge crosses is blended toward the
+/// edge colour (interpolated from the vertices, clamped to them) by the
+/// part of it on the solid's side, times the column's cover.
+fn edge_ref(f: &mut RefFrame, cfg: &Config, e: &EdgeCmd, wid: u8) {
+    let mut cells = Vec::new();
+    let [p0, p1] = e.v.map(|v| (v.x, v.y));
+    let (y_major, reversed) = cells_ref(p0, p1, |_, c, cover, t, u| cells.push((c, cover, t, u)));
+    let v = if reversed { [e.v[1], e.v[0]] } else { e.v };
+    let (dx, dy) = (
+        (e.v[1].x - e.v[0].x).to_num::<f64>(),
+        (e.v[1].y - e.v[0].y).to_num::<f64>(),
+    );
+    // The solid's side along the minor axis: cross(d, q - p0) grows with +y by
+    // dx and with +x by -dy.
+    let right_up = if y_major { dy < 0.0 } else { dx > 0.0 };
+    let up = right_up == (e.interior == Side::Right);
+    for (c, cover, t, u) in cells {
+        let r0 = u.floor();
+        let d = u - r0;
+        let (r, part) = if up { (r0, 0.5 - d) } else { (r0 + 1.0, d - 0.5) };
+        let tc = t.clamp(0.0, 1.0);
+        let col: [f64; 3] = std::array::from_fn(|ch| {
+            let [a, b] = v.map(|v| rgb(v.color)[ch]);
+            a + tc * (b - a)
+        });
+        let zc = v[0].z as f64 + t * (v[1].z as f64 - v[0].z as f64);
+        blend_ref(f, cfg, y_major, (c, r as i64), col, part * cover, zc, wid);
     }
 }
 
@@ -297,5 +365,244 @@ fn triangle(f: &mut RefFrame, cfg: &Config, v: &[Vertex; 3], wid: u8) {
                 wid,
             );
         }
+    }
+}
+
+/// The ideal scene, supersampled: an `n x n` regular grid of samples per
+/// pixel (at `(i + 1/2) / n`), each with its own colour, depth and window ID,
+/// resolved with a box filter. Triangles cover the samples inside their exact
+/// edges (top-left rule on ties, as the pipeline), with colour and depth
+/// interpolated at the sample; a line is the ideal 1-pixel-wide rectangle
+/// from `p0` to `p1` (butt ends), Z-tested without writing Z, whatever its
+/// drawing mode; edge-antialiasing commands are skipped (the ideal needs
+/// none); fills and spans cover whole pixels. This is the "16x16
+/// supersampled reference" that approximate modes are measured against.
+///
+/// Rendered in bands of 8 rows, so a 16x16 reference of a 240x160 screen
+/// needs about 8 MB.
+pub fn supersample(cfg: &Config, cmds: &[Command], n: u32) -> RefFrame {
+    let (w, h) = (cfg.width as u32, cfg.height as u32);
+    let mut out = render(cfg, &[]);
+    let n = n.max(1);
+    let nn = (n * n) as f64;
+    const BAND: u32 = 8;
+    for y0 in (0..h).step_by(BAND as usize) {
+        let bh = BAND.min(h - y0);
+        let band = Rect::new(0, y0 as i32, w, bh);
+        let mut s = Samples {
+            n,
+            y0,
+            sw: w * n,
+            sh: bh * n,
+            color: vec![rgb(cfg.clear.color); (w * n * bh * n) as usize],
+            depth: vec![
+                if cfg.depth {
+                    cfg.clear.depth as f64
+                } else {
+                    f64::INFINITY
+                };
+                (w * n * bh * n) as usize
+            ],
+            wid: vec![cfg.clear.wid; (w * n * bh * n) as usize],
+        };
+        for cmd in cmds {
+            if !cmd.bounds().is_some_and(|b| b.intersect(&band).is_some()) {
+                continue;
+            }
+            s.draw(cfg, cmd);
+        }
+        for py in 0..bh {
+            for px in 0..w {
+                let mut acc = [0.0; 3];
+                for j in 0..n {
+                    for i in 0..n {
+                        let c = s.color[((py * n + j) * s.sw + px * n + i) as usize];
+                        (0..3).for_each(|ch| acc[ch] += c[ch]);
+                    }
+                }
+                let o = ((y0 + py) * w + px) as usize;
+                out.color[o] = acc.map(|v| v / nn);
+                out.wid[o] = s.wid[(py * n * s.sw + px * n) as usize];
+            }
+        }
+    }
+    if cfg.format.is_gray() {
+        for c in &mut out.color {
+            let y = (77.0 * c[0] + 150.0 * c[1] + 29.0 * c[2]) / 256.0;
+            *c = [y; 3];
+        }
+    }
+    out
+}
+
+/// One band of samples.
+struct Samples {
+    n: u32,
+    /// First pixel row of the band.
+    y0: u32,
+    sw: u32,
+    sh: u32,
+    color: Vec<[f64; 3]>,
+    depth: Vec<f64>,
+    wid: Vec<u8>,
+}
+
+impl Samples {
+    /// Sample index range covering pixel rectangle `r` (clipped), per row.
+    fn pixels(&mut self, r: &Rect, mut f: impl FnMut(&mut Self, usize, i64, i64)) {
+        let band = Rect::new(0, self.y0 as i32, self.sw / self.n, self.sh / self.n);
+        let Some(r) = r.intersect(&band) else { return };
+        let n = self.n as i64;
+        for py in r.y as i64..r.y1() {
+            for px in r.x as i64..r.x1() {
+                for j in 0..n {
+                    for i in 0..n {
+                        let sy = (py - self.y0 as i64) * n + j;
+                        let idx = (sy * self.sw as i64 + px * n + i) as usize;
+                        f(self, idx, px, py);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The window-ID and depth test of a sample; writes depth when `write_z`.
+    fn pass(&mut self, cfg: &Config, i: usize, z: f64, wid: u8, write_z: bool) -> bool {
+        if cfg.wid && self.wid[i] != wid {
+            return false;
+        }
+        if cfg.depth {
+            if z >= self.depth[i] {
+                return false;
+            }
+            if write_z {
+                self.depth[i] = z;
+            }
+        }
+        true
+    }
+
+    /// Calls `f(self, index, x, y)` for every sample whose position (in
+    /// pixels) lies in the bounding box `[x0, x1] x [y0, y1]`.
+    fn samples_in(&mut self, bb: [f64; 4], mut f: impl FnMut(&mut Self, usize, f64, f64)) {
+        let n = self.n as f64;
+        let (oy, sw, sh) = (self.y0 as f64, self.sw as i64, self.sh as i64);
+        // Sample (i, j) sits at ((i + 0.5) / n, y0 + (j + 0.5) / n).
+        let i0 = ((bb[0] * n - 0.5).ceil() as i64).max(0);
+        let i1 = ((bb[1] * n - 0.5).floor() as i64).min(sw - 1);
+        let j0 = (((bb[2] - oy) * n - 0.5).ceil() as i64).max(0);
+        let j1 = (((bb[3] - oy) * n - 0.5).floor() as i64).min(sh - 1);
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                let (x, y) = ((i as f64 + 0.5) / n, oy + (j as f64 + 0.5) / n);
+                f(self, (j * sw + i) as usize, x, y);
+            }
+        }
+    }
+
+    fn draw(&mut self, cfg: &Config, cmd: &Command) {
+        match cmd {
+            Command::WidFill { rect, wid } => {
+                if cfg.wid {
+                    self.pixels(rect, |s, i, _, _| s.wid[i] = *wid);
+                }
+            }
+            Command::Fill { rect, color, state } => self.pixels(rect, |s, i, _, _| {
+                if !cfg.wid || s.wid[i] == state.wid {
+                    s.color[i] = rgb(*color);
+                }
+            }),
+            Command::ZFill { rect, z, state } => self.pixels(rect, |s, i, _, _| {
+                if cfg.depth && (!cfg.wid || s.wid[i] == state.wid) {
+                    s.depth[i] = *z as f64;
+                }
+            }),
+            Command::Span { span, state } => {
+                let r = Rect::new(span.x, span.y, span.len as u32, 1);
+                self.pixels(&r, |s, i, px, _| {
+                    let k = (px - span.x as i64) as f64;
+                    let c = std::array::from_fn(|ch| {
+                        span.color[ch].to_num::<f64>() + span.dcolor[ch].to_num::<f64>() * k
+                    });
+                    let z = span.z.to_num::<f64>() + span.dz.to_num::<f64>() * k;
+                    if s.pass(cfg, i, z, state.wid, true) {
+                        s.color[i] = c;
+                    }
+                });
+            }
+            Command::Triangle { v, state } => self.triangle(cfg, v, state.wid),
+            Command::Line { line, state } => self.line(cfg, line, state.wid),
+            Command::Edge { .. } => {}
+        }
+    }
+
+    fn triangle(&mut self, cfg: &Config, v: &[Vertex; 3], wid: u8) {
+        let p = v.map(|v| (v.x.to_num::<f64>(), v.y.to_num::<f64>()));
+        let cross = |a: (f64, f64), b: (f64, f64), c: (f64, f64)| {
+            (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0)
+        };
+        let mut idx = [0usize, 1, 2];
+        let mut area = cross(p[0], p[1], p[2]);
+        if area == 0.0 {
+            return;
+        }
+        if area < 0.0 {
+            idx.swap(1, 2);
+            area = -area;
+        }
+        let q = idx.map(|i| p[i]);
+        let vv = idx.map(|i| v[i]);
+        let edges = [(q[1], q[2]), (q[2], q[0]), (q[0], q[1])];
+        let owns = |a: (f64, f64), b: (f64, f64)| b.1 < a.1 || (b.1 == a.1 && b.0 > a.0);
+        let bb = [
+            q.iter().map(|p| p.0).fold(f64::INFINITY, f64::min),
+            q.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max),
+            q.iter().map(|p| p.1).fold(f64::INFINITY, f64::min),
+            q.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max),
+        ];
+        self.samples_in(bb, |s, i, x, y| {
+            let e = edges.map(|(a, b)| cross(a, b, (x, y)));
+            if !(0..3).all(|k| e[k] > 0.0 || (e[k] == 0.0 && owns(edges[k].0, edges[k].1))) {
+                return;
+            }
+            let wt = e.map(|e| e / area);
+            let z: f64 = (0..3).map(|k| wt[k] * vv[k].z as f64).sum();
+            if s.pass(cfg, i, z, wid, true) {
+                s.color[i] =
+                    std::array::from_fn(|ch| (0..3).map(|k| wt[k] * rgb(vv[k].color)[ch]).sum());
+            }
+        });
+    }
+
+    fn line(&mut self, cfg: &Config, l: &LineCmd, wid: u8) {
+        let [p, q] = [l.p0, l.p1].map(|(x, y)| (x.to_num::<f64>(), y.to_num::<f64>()));
+        let (dx, dy) = (q.0 - p.0, q.1 - p.1);
+        let len = (dx * dx + dy * dy).sqrt();
+        if len == 0.0 {
+            return;
+        }
+        let (ux, uy) = (dx / len, dy / len);
+        let major = |x: f64, y: f64| if dy.abs() > dx.abs() { y } else { x };
+        let bb = [
+            p.0.min(q.0) - 0.5,
+            p.0.max(q.0) + 0.5,
+            p.1.min(q.1) - 0.5,
+            p.1.max(q.1) + 0.5,
+        ];
+        let c = rgb(l.color);
+        self.samples_in(bb, |s, i, x, y| {
+            let (rx, ry) = (x - p.0, y - p.1);
+            let t = rx * ux + ry * uy;
+            let d = rx * uy - ry * ux;
+            if !(0.0..len).contains(&t) || d.abs() > 0.5 {
+                return;
+            }
+            // Style: pixels counted along the major axis from p0.
+            let k = (major(x, y) - major(p.0, p.1)).abs().floor() as u32;
+            let z = l.z[0] as f64 + t / len * (l.z[1] as f64 - l.z[0] as f64);
+            if l.style.on(k) && s.pass(cfg, i, z, wid, false) {
+                s.color[i] = c;
+            }
+        });
     }
 }

@@ -123,6 +123,8 @@ enum CommandSpec {
     Triangle {
         v: [[f64; 6]; 3],
         #[serde(default)]
+        edge_aa: bool,
+        #[serde(default)]
         window: u8,
         plane_mask: Option<u32>,
     },
@@ -225,6 +227,11 @@ pub struct Scene {
     pub notes: Vec<String>,
     /// Mesh statistics, summed.
     pub mesh: MeshStats,
+    /// Commands before the antialiased edges.
+    solid_commands: usize,
+    /// Every edge that edge antialiasing can draw (triangles' edges, meshes'
+    /// silhouettes), and whether it is on.
+    edges: Vec<(bool, Command)>,
 }
 
 fn line_of(src: &str, offset: usize) -> usize {
@@ -316,6 +323,7 @@ impl Scene {
         let mut commands = Vec::new();
         let mut notes = Vec::new();
         let mut mesh_stats = MeshStats::default();
+        let mut edges = Vec::new();
         for w in &file.window {
             let line = line_of(src, w.span().start);
             let w = w.get_ref();
@@ -335,6 +343,7 @@ impl Scene {
             let cmd = match c.get_ref() {
                 CommandSpec::Triangle {
                     v,
+                    edge_aa,
                     window,
                     plane_mask,
                 } => {
@@ -363,10 +372,12 @@ impl Scene {
                             Vertex::try_from_f32(p[0] as f32, p[1] as f32, z.round() as u16, color)
                                 .map_err(|e| at(format!("vertex {k}: {e}")))?;
                     }
-                    Command::Triangle {
-                        v: vs,
-                        state: state(*window, *plane_mask),
+                    let st = state(*window, *plane_mask);
+                    for i in 0..3 {
+                        let edge = tilerast::line::EdgeCmd::of_triangle(&vs, i);
+                        edges.push((*edge_aa, Command::Edge { edge, state: st }));
                     }
+                    Command::Triangle { v: vs, state: st }
                 }
                 CommandSpec::Span {
                     x,
@@ -483,11 +494,24 @@ impl Scene {
                     continue;
                 }
                 CommandSpec::Mesh(spec) => {
-                    let st = mesh::load(spec, base, (config.width, config.height), &mut commands)
-                        .map_err(at)?;
+                    let mut found = Vec::new();
+                    let mesh_spec = mesh::MeshSpec {
+                        edge_aa: true,
+                        ..spec.clone()
+                    };
+                    let st = mesh::load(
+                        &mesh_spec,
+                        base,
+                        (config.width, config.height),
+                        &mut commands,
+                        &mut found,
+                    )
+                    .map_err(at)?;
+                    edges.extend(found.into_iter().map(|e| (spec.edge_aa, e)));
                     notes.push(format!(
-                        "mesh {}: {} vertices, {} triangles, {} groups, {} dropped (near plane / guard band), {} wireframe lines",
-                        spec.obj, st.vertices, st.triangles, st.groups, st.dropped, st.lines
+                        "mesh {}: {} vertices, {} triangles, {} groups, {} dropped (near plane / guard band), {} wireframe lines, {} silhouette edges{}",
+                        spec.obj, st.vertices, st.triangles, st.groups, st.dropped, st.lines, st.edges,
+                        if spec.edge_aa { " (antialiased)" } else { "" }
                     ));
                     mesh_stats.vertices += st.vertices;
                     mesh_stats.triangles += st.triangles;
@@ -498,16 +522,37 @@ impl Scene {
             };
             commands.push(cmd);
         }
-        Ok(Scene {
+        let mut scene = Scene {
             config,
+            solid_commands: commands.len(),
             commands,
             notes,
             mesh: mesh_stats,
-        })
+            edges,
+        };
+        scene.rebuild_edges();
+        Ok(scene)
     }
 }
 
 impl Scene {
+    /// Turns edge antialiasing (seed 003 eq. 8) on or off for every
+    /// triangle and mesh of the scene.
+    pub fn set_edge_aa(&mut self, on: bool) {
+        for e in &mut self.edges {
+            e.0 = on;
+        }
+        self.rebuild_edges();
+    }
+
+    /// Appends the edges that are on after every other command: edge
+    /// antialiasing blends over the finished solids.
+    fn rebuild_edges(&mut self) {
+        self.commands.truncate(self.solid_commands);
+        let on = self.edges.iter().filter(|e| e.0).map(|e| e.1);
+        self.commands.extend(on);
+    }
+
     /// Overrides every line's mode: two-point (Wu) antialiased or Bresenham.
     pub fn set_line_aa(&mut self, antialias: bool) {
         for c in &mut self.commands {

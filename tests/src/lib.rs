@@ -77,8 +77,8 @@ pub fn tri(v: [Vertex; 3], wid: u8) -> Command {
 
 /// A random command for a screen of about 100x80 pixels, drawing into window
 /// `wid`, sometimes with a partial plane mask: fills, Z fills, ramps (span
-/// commands whose colour and depth stay in range), styled lines and
-/// triangles reaching beyond the screen.
+/// commands whose colour and depth stay in range), styled lines,
+/// antialiased solid edges and triangles reaching beyond the screen.
 pub fn random_command(rng: &mut Rng, wid: u8) -> Command {
     let mask = if rng.range(0, 4) == 0 {
         rng.next_u64() as u32
@@ -89,7 +89,12 @@ pub fn random_command(rng: &mut Rng, wid: u8) -> Command {
         wid,
         plane_mask: mask,
     };
-    match rng.range(0, 6) {
+    match rng.range(0, 7) {
+        6 => {
+            let v = rng.triangle((-400, 1900), (-400, 1500));
+            let edge = tilerast::line::EdgeCmd::of_triangle(&v, rng.range(0, 3) as usize);
+            Command::Edge { edge, state }
+        }
         5 => {
             let mut p = || {
                 (
