@@ -11,12 +11,12 @@
 //!
 //! | stage | module | what it does |
 //! | --- | --- | --- |
-//! | commands | [`command`], [`list`] | the display list: spans, triangles, lines, fills |
+//! | commands | [`command`], [`list`] | the display list: spans, triangles, lines, antialiased edges, fills |
 //! | setup | [`setup`] | vertices to exact integer edge functions and attribute planes |
 //! | bin | [`frame`] | each tile replays only the commands whose bounds touch it |
 //! | traverse | [`traverse`] | exact per-row coverage with the top-left fill rule |
 //! | span | [`span`] | the one span DDA every command type uses |
-//! | vector | [`line`] | Bresenham lines with sub-pixel endpoints and styles |
+//! | vector, AA | [`line`] | Bresenham and two-point (Wu) lines with sub-pixel endpoints and styles; edge antialiasing of solids |
 //! | fragment tests | [`fragment`] | window ID, then Z (less-than, read-modify-write) |
 //! | dither / pack | [`dither`], [`format`] | address-bit ordered dither, display formats |
 //! | tile planes | [`tile`] | colour, depth and window-ID planes chosen by type |

@@ -1,6 +1,8 @@
 //! Vector drawing (seed 001, §II and Conclusion: "vector drawing with line
 //! styles"): Bresenham lines with sub-pixel endpoints, depth, window ID,
-//! plane mask and a repeating on/off style.
+//! plane mask and a repeating on/off style; two-point (Wu) antialiased lines
+//! (seed 003 eqs. 4-7) and edge antialiasing of solids (seed 003 eq. 8),
+//! which walk the same way.
 //!
 //! **Which pixels.** Along the major axis (the larger of `|dx|`, `|dy|`),
 //! every pixel whose centre `16 c + 8` lies in the half-open interval from
@@ -19,11 +21,21 @@
 //!
 //! Each pixel goes through the same fragment path as spans (window ID, Z,
 //! dither, pack, plane mask).
+//!
+//! **Two-point lines** ([`LineCmd::antialias`]) visit every column the
+//! line's extent touches and blend the two pixels straddling the exact line
+//! at the column centre over the tile, by distance (eq. 7); end columns are
+//! weighted by the part of their cell the line covers, so a line neither
+//! brightens nor dims at its ends or at tile borders.
+//!
+//! **Antialiased edges** ([`EdgeCmd`]) walk the same columns and blend only
+//! the pixel outside the solid, by the part of it the solid covers (eq. 8).
+//! A scene without them has no such command: no plane, no pass, no cost.
 
+use crate::command::Vertex;
 use crate::error::Error;
 use crate::format::Rgb;
 use crate::geom::Rect;
-use crate::command::Vertex;
 use crate::numeric::{div_floor, Coord, SUBPIXEL, Z_FRAC};
 use crate::traverse::FloorWalk;
 
@@ -199,13 +211,13 @@ pub struct EdgeCmd {
 impl EdgeCmd {
     /// Edge `i` of a triangle, from `v[i]` to `v[(i + 1) % 3]`, with the
     /// third vertex inside (a degenerate triangle gives `Side::Left`).
-    pub fn of_triangle(v: &[Vertex; 3], i: usize) -> EdgeCmd {
+    pub const fn of_triangle(v: &[Vertex; 3], i: usize) -> EdgeCmd {
         let (a, b, q) = (v[i % 3], v[(i + 1) % 3], v[(i + 2) % 3]);
-        let p = |v: Vertex| (v.x.to_bits() as i64, v.y.to_bits() as i64);
-        let (a, b_, q_) = (p(a), p(b), p(q));
-        let cross = (b_.0 - a.0) * (q_.1 - a.1) - (b_.1 - a.1) * (q_.0 - a.0);
+        let (ax, ay) = (a.x.to_bits() as i64, a.y.to_bits() as i64);
+        let (dx, dy) = (b.x.to_bits() as i64 - ax, b.y.to_bits() as i64 - ay);
+        let cross = dx * (q.y.to_bits() as i64 - ay) - dy * (q.x.to_bits() as i64 - ax);
         EdgeCmd {
-            v: [v[i % 3], b],
+            v: [a, b],
             interior: if cross > 0 { Side::Right } else { Side::Left },
         }
     }

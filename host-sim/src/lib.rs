@@ -6,6 +6,7 @@
 //! reference rasterizer ([`reference`]), and measures the difference
 //! ([`metrics`]).
 
+pub mod aa;
 pub mod image;
 pub mod mesh;
 pub mod metrics;

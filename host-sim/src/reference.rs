@@ -210,7 +210,11 @@ fn cells_ref(
     let y_major = (p[1].1 - p[0].1).abs() > (p[1].0 - p[0].0).abs();
     let mm = p.map(|(x, y)| if y_major { (y, x) } else { (x, y) });
     let reversed = mm[1].0 < mm[0].0;
-    let (a, b) = if reversed { (mm[1], mm[0]) } else { (mm[0], mm[1]) };
+    let (a, b) = if reversed {
+        (mm[1], mm[0])
+    } else {
+        (mm[0], mm[1])
+    };
     if a.0 == b.0 {
         return (y_major, reversed);
     }
@@ -242,7 +246,11 @@ fn blend_ref(
     z: f64,
     wid: u8,
 ) {
-    let (x, y) = if y_major { (minor, major) } else { (major, minor) };
+    let (x, y) = if y_major {
+        (minor, major)
+    } else {
+        (major, minor)
+    };
     if w <= 0.0 || x < 0 || y < 0 || x >= f.width as i64 || y >= f.height as i64 {
         return;
     }
@@ -297,7 +305,11 @@ fn edge_ref(f: &mut RefFrame, cfg: &Config, e: &EdgeCmd, wid: u8) {
     for (c, cover, t, u) in cells {
         let r0 = u.floor();
         let d = u - r0;
-        let (r, part) = if up { (r0, 0.5 - d) } else { (r0 + 1.0, d - 0.5) };
+        let (r, part) = if up {
+            (r0, 0.5 - d)
+        } else {
+            (r0 + 1.0, d - 0.5)
+        };
         let tc = t.clamp(0.0, 1.0);
         let col: [f64; 3] = std::array::from_fn(|ch| {
             let [a, b] = v.map(|v| rgb(v.color)[ch]);
@@ -388,7 +400,6 @@ pub fn supersample(cfg: &Config, cmds: &[Command], n: u32) -> RefFrame {
     const BAND: u32 = 8;
     for y0 in (0..h).step_by(BAND as usize) {
         let bh = BAND.min(h - y0);
-        let band = Rect::new(0, y0 as i32, w, bh);
         let mut s = Samples {
             n,
             y0,
@@ -405,10 +416,9 @@ pub fn supersample(cfg: &Config, cmds: &[Command], n: u32) -> RefFrame {
             ],
             wid: vec![cfg.clear.wid; (w * n * bh * n) as usize],
         };
+        // Every command clips itself to the band's samples (the pipeline's
+        // bounds are pixel-centre bounds; the ideal reaches past them).
         for cmd in cmds {
-            if !cmd.bounds().is_some_and(|b| b.intersect(&band).is_some()) {
-                continue;
-            }
             s.draw(cfg, cmd);
         }
         for py in 0..bh {

@@ -21,6 +21,7 @@
 //! kind = "triangle"          # x, y in pixels (1/16 px precision), z 0..65535, r, g, b
 //! window = 1
 //! v = [[10, 10, 100, 255, 0, 0], [100, 20, 100, 0, 255, 0], [50, 90, 100, 0, 0, 255]]
+//! edge_aa = true             # optional: antialias its edges (seed 003 eq. 8)
 //!
 //! [[command]]
 //! kind = "span"              # the raster engine's span: start values and per-pixel steps
@@ -63,7 +64,12 @@
 //! obj = "../../shared/models/teapot.obj"
 //! eye = [0, 1, 3]
 //! rotate_y = 30
+//! edge_aa = true             # optional: antialias its silhouette and open boundary
 //! ```
+//!
+//! Antialiased edges are drawn after every other command, over the finished
+//! solids; `tilerast-sim render --edge-aa on|off` switches them for the
+//! whole scene (every triangle's edges, every mesh's silhouette).
 //!
 //! Every command takes an optional `window` (default 0). Errors name the file,
 //! the line and the problem.
@@ -219,6 +225,8 @@ fn point(p: [f64; 2]) -> Result<(Coord, Coord), String> {
 /// A loaded scene: its configuration and display list.
 #[derive(Debug, Clone)]
 pub struct Scene {
+    /// The file's stem (`"scene"` when parsed from text).
+    pub name: String,
     /// Pipeline configuration.
     pub config: Config,
     /// Commands in drawing order (windows first).
@@ -268,8 +276,12 @@ impl Scene {
     pub fn load(path: impl AsRef<Path>) -> Result<Scene, String> {
         let path = path.as_ref();
         let src = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        Scene::parse(&src, path.parent().unwrap_or(Path::new(".")))
-            .map_err(|e| format!("{}:{e}", path.display()))
+        let mut scene = Scene::parse(&src, path.parent().unwrap_or(Path::new(".")))
+            .map_err(|e| format!("{}:{e}", path.display()))?;
+        if let Some(stem) = path.file_stem() {
+            scene.name = stem.to_string_lossy().into_owned();
+        }
+        Ok(scene)
     }
 
     /// Parses scene text; errors start with `line: `.
@@ -523,6 +535,7 @@ impl Scene {
             commands.push(cmd);
         }
         let mut scene = Scene {
+            name: "scene".into(),
             config,
             solid_commands: commands.len(),
             commands,

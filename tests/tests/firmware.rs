@@ -288,6 +288,11 @@ fn report(reports: &[BoardResult]) -> String {
         ("flat fill, RGB565", "fill_rgb565", fill_px),
         ("Gouraud, RGB565", "gouraud_rgb565", tri_px),
         ("Gouraud + Z", "gouraud_z_rgb565", tri_px),
+        (
+            "Gouraud + Z + edge AA (eq. 8) on every edge",
+            "gouraud_z_edge_aa_rgb565",
+            tri_px,
+        ),
         ("Gouraud + Z + window ID", "gouraud_z_wid_rgb565", tri_px),
         (
             "Gouraud + Z + window ID + 8x8 dither",

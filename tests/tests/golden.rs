@@ -23,3 +23,8 @@ fn ssd1306_matches_golden() {
 fn lines_match_golden() {
     check("lines");
 }
+
+#[test]
+fn edges_match_golden() {
+    check("edges");
+}

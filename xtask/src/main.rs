@@ -284,7 +284,25 @@ fn bench() -> Result<(), String> {
     std::fs::create_dir_all("reports").map_err(|e| e.to_string())?;
     std::fs::write("reports/bench.md", &md).map_err(|e| e.to_string())?;
     println!("{md}");
-    Ok(())
+    // The quality axis of the same modes: error against the ideal.
+    run(
+        "cargo",
+        &[
+            "run",
+            "--release",
+            "-q",
+            "-p",
+            "tilerast-sim",
+            "--",
+            "aa-report",
+            "scenes/edges.toml",
+            "scenes/demo.toml",
+            "-o",
+            "reports/aa.md",
+            "--image",
+            "reports/aa.png",
+        ],
+    )
 }
 
 /// Runs the firmware under QEMU and writes `reports/targets.md`.

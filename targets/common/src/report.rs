@@ -3,7 +3,7 @@
 //! the host with any clock, so the host computes the CRCs the boards must
 //! print.
 
-use crate::workloads::{self, FILL_CMDS, LINE_CMDS, TRIANGLE_CMDS, WU_LINE_CMDS};
+use crate::workloads::{self, EDGE_AA_CMDS, FILL_CMDS, LINE_CMDS, TRIANGLE_CMDS, WU_LINE_CMDS};
 use crate::{run_scene, Clock, SceneRun};
 use core::fmt::Write;
 use embedded_graphics::{pixelcolor::IntoStorage, prelude::Size};
@@ -123,7 +123,7 @@ fn bench_one<F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither>(
 
 /// Prints `bench NAME ticks T` for each workload: flat fill; Gouraud
 /// alone, with Z, with Z and window ID, and with those and 8x8 dither (all
-/// RGB565); the same triangles through `embedded-graphics`' `Triangle`
+/// RGB565), and with Z and every edge antialiased; the same triangles through `embedded-graphics`' `Triangle`
 /// fill; lines, Bresenham and two-point (Wu) antialiased, and the same
 /// lines through `embedded-graphics`' `Line`.
 pub fn report_benches(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt::Result {
@@ -145,6 +145,13 @@ pub fn report_benches(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt
     bench_one::<Rgb565Format, Depth16, NoWid, NoDither>(
         "gouraud_z_rgb565",
         tris,
+        Via::Ours,
+        out,
+        clock,
+    )?;
+    bench_one::<Rgb565Format, Depth16, NoWid, NoDither>(
+        "gouraud_z_edge_aa_rgb565",
+        &EDGE_AA_CMDS,
         Via::Ours,
         out,
         clock,

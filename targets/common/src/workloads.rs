@@ -24,7 +24,10 @@ pub const LINES: usize = 48;
 
 /// Small Gouraud triangles (about 12 px across) with random depth and
 /// colours, scattered over the tile.
-pub static TRIANGLE_CMDS: [Command; TRIANGLES] = triangles();
+pub static TRIANGLE_CMDS: [Command; TRIANGLES] = TRIANGLE_CMDS_CONST;
+/// The same triangles followed by all their edges, antialiased (seed 003
+/// eq. 8): what edge antialiasing adds, at its most (every edge).
+pub static EDGE_AA_CMDS: [Command; 4 * TRIANGLES] = with_edges();
 /// Full-tile flat fills.
 pub static FILL_CMDS: [Command; FILLS] = fills();
 /// Lines across the tile in every direction, Bresenham.
@@ -94,6 +97,31 @@ const fn triangles() -> [Command; TRIANGLES] {
     }
     out
 }
+
+const fn with_edges() -> [Command; 4 * TRIANGLES] {
+    let mut out = [Command::WidFill {
+        rect: Rect::new(0, 0, 0, 0),
+        wid: 0,
+    }; 4 * TRIANGLES];
+    let mut i = 0;
+    while i < TRIANGLES {
+        out[i] = TRIANGLE_CMDS_CONST[i];
+        if let Command::Triangle { v, state } = TRIANGLE_CMDS_CONST[i] {
+            let mut k = 0;
+            while k < 3 {
+                out[TRIANGLES + 3 * i + k] = Command::Edge {
+                    edge: tilerast::line::EdgeCmd::of_triangle(&v, k),
+                    state,
+                };
+                k += 1;
+            }
+        }
+        i += 1;
+    }
+    out
+}
+
+const TRIANGLE_CMDS_CONST: [Command; TRIANGLES] = triangles();
 
 const fn fills() -> [Command; FILLS] {
     let mut out = [Command::WidFill {
