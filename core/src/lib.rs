@@ -69,6 +69,7 @@
 #![forbid(unsafe_code)]
 
 pub mod command;
+pub mod coverage;
 pub mod dither;
 pub mod error;
 pub mod format;

@@ -95,23 +95,38 @@ pub(crate) fn pixel_bounds(v: &[Vertex; 3]) -> Option<Rect> {
     (x0 <= x1 && y0 <= y1).then(|| Rect::new(x0, y0, (x1 - x0 + 1) as u32, (y1 - y0 + 1) as u32))
 }
 
+/// The edges of a triangle oriented so that the inside is `E >= bias`
+/// (`e[i]` opposite vertex `i`), its doubled area and whether the second and
+/// third vertices were swapped to get there; `None` for zero area.
+pub(crate) fn oriented_edges(v: &[Vertex; 3]) -> Option<([Edge; 3], i64, bool)> {
+    let (p0, mut p1, mut p2) = (sub(&v[0]), sub(&v[1]), sub(&v[2]));
+    let mut area2 = (p1.0 - p0.0) * (p2.1 - p0.1) - (p1.1 - p0.1) * (p2.0 - p0.0);
+    if area2 == 0 {
+        return None;
+    }
+    let swapped = area2 < 0;
+    if swapped {
+        core::mem::swap(&mut p1, &mut p2);
+        area2 = -area2;
+    }
+    Some((
+        [Edge::new(p1, p2), Edge::new(p2, p0), Edge::new(p0, p1)],
+        area2,
+        swapped,
+    ))
+}
+
 impl<L: Lanes> TriangleSetup<L> {
     /// Sets up a validated triangle; `None` when it has zero area or covers
     /// no pixel centre.
     pub fn new<F: PixelFormat<Lanes = L>>(v: &[Vertex; 3]) -> Option<Self> {
         let bounds = pixel_bounds(v)?;
-        let (p0, mut p1, mut p2) = (sub(&v[0]), sub(&v[1]), sub(&v[2]));
-        let (mut v1, mut v2) = (&v[1], &v[2]);
-        let mut area2 = (p1.0 - p0.0) * (p2.1 - p0.1) - (p1.1 - p0.1) * (p2.0 - p0.0);
-        if area2 == 0 {
-            return None;
-        }
-        if area2 < 0 {
-            core::mem::swap(&mut p1, &mut p2);
-            core::mem::swap(&mut v1, &mut v2);
-            area2 = -area2;
-        }
-        let e = [Edge::new(p1, p2), Edge::new(p2, p0), Edge::new(p0, p1)];
+        let (e, area2, swapped) = oriented_edges(v)?;
+        let (v1, v2) = if swapped {
+            (&v[2], &v[1])
+        } else {
+            (&v[1], &v[2])
+        };
         let lanes = |v: &Vertex| {
             let c = v.color;
             F::lanes_from_rgb([c.r as i64, c.g as i64, c.b as i64].map(|x| x << COLOR_FRAC))
