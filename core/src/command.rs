@@ -70,7 +70,8 @@ impl Vertex {
     }
 }
 
-/// Per-command state (the seed's window ID and plane mask).
+/// Per-command state (the seed's window ID and plane mask, and the RUF
+/// seed's object tag).
 ///
 /// ```
 /// use tilerast::command::State;
@@ -86,14 +87,18 @@ pub struct State {
     /// Bits of the packed pixel the command may change (in the display
     /// format's packing, e.g. `0xF800` = red of RGB565). Default: all.
     pub plane_mask: u32,
+    /// Object tag (seed 000): triangles of one object share it, so the RUF
+    /// buffer merges their fragments. Used only by coverage antialiasing.
+    pub tag: u16,
 }
 
 impl State {
-    /// Window `wid`, every plane writable.
+    /// Window `wid`, every plane writable, object tag 0.
     pub const fn new(wid: u8) -> Self {
         State {
             wid,
             plane_mask: u32::MAX,
+            tag: 0,
         }
     }
 }
@@ -239,6 +244,24 @@ impl Command {
             Command::Line { line, .. } => line.validate(),
             Command::Edge { edge, .. } => edge.validate(),
             _ => Ok(()),
+        }
+    }
+
+    /// The pixels the command can touch with coverage antialiasing: for a
+    /// triangle every pixel whose cell its box meets (a sample anywhere in
+    /// the cell may be inside), otherwise [`Command::bounds`].
+    pub fn coverage_bounds(&self) -> Option<Rect> {
+        match self {
+            Command::Triangle { v, .. } => {
+                let cells = |f: fn(&Vertex) -> i32| {
+                    let lo = v.iter().map(f).min().unwrap_or(0) >> 4;
+                    let hi = v.iter().map(f).max().unwrap_or(0) >> 4;
+                    (lo, (hi - lo + 1) as u32)
+                };
+                let ((x, w), (y, h)) = (cells(|v| v.x.to_bits()), cells(|v| v.y.to_bits()));
+                Some(Rect::new(x, y, w, h))
+            }
+            _ => self.bounds(),
         }
     }
 

@@ -4,6 +4,7 @@
 //! byte-identical to rendering the frame as one big tile.
 
 use crate::command::Command;
+use crate::coverage::AaMode;
 use crate::dither::Dither;
 use crate::error::{Error, FlushError};
 use crate::format::{PixelFormat, Rgb};
@@ -155,29 +156,43 @@ impl Frame {
     /// Renders every tile and hands each finished tile to `done` (an
     /// overlay drawn with `embedded-graphics`, then a flush, a hash, a copy
     /// into a PNG...). Commands are validated once per frame.
-    pub fn render_with<const N: usize, F, Z, W, D, S, E>(
+    pub fn render_with<const N: usize, F, Z, W, D, A, S, E>(
         &self,
-        tile: &mut Tile<N, F, Z, W, D>,
+        tile: &mut Tile<N, F, Z, W, D, A>,
         cmds: &S,
-        mut done: impl FnMut(&mut Tile<N, F, Z, W, D>) -> Result<(), E>,
+        mut done: impl FnMut(&mut Tile<N, F, Z, W, D, A>) -> Result<(), E>,
     ) -> Result<FrameStats, FlushError<E>>
     where
         F: PixelFormat,
         Z: DepthMode,
         W: WidMode,
         D: Dither,
+        A: AaMode,
         S: CommandSource + ?Sized,
     {
         cmds.validate()?;
         let mut stats = FrameStats::default();
         for area in self.tiles() {
             tile.begin(area, &self.clear)?;
-            cmds.each(|cmd| {
-                if cmd.bounds().and_then(|b| b.intersect(&area)).is_some() {
-                    tile.draw_valid(cmd);
-                    stats.replayed += 1;
-                }
-            })?;
+            let mut replay = |tile: &mut Tile<N, F, Z, W, D, A>| {
+                cmds.each(|cmd| {
+                    let bounds = if A::SAMPLES > 0 {
+                        cmd.coverage_bounds()
+                    } else {
+                        cmd.bounds()
+                    };
+                    if bounds.and_then(|b| b.intersect(&area)).is_some() {
+                        tile.draw_valid(cmd);
+                        stats.replayed += 1;
+                    }
+                })
+            };
+            replay(tile)?;
+            // With coverage antialiasing: resolve, then spans and lines over
+            // the resolved pixels.
+            if tile.finish() {
+                replay(tile)?;
+            }
             done(tile).map_err(FlushError::Target)?;
             stats.tiles += 1;
         }
@@ -185,9 +200,9 @@ impl Frame {
     }
 
     /// Renders every tile and flushes it to `target`.
-    pub fn render<const N: usize, F, Z, W, D, S, T>(
+    pub fn render<const N: usize, F, Z, W, D, A, S, T>(
         &self,
-        tile: &mut Tile<N, F, Z, W, D>,
+        tile: &mut Tile<N, F, Z, W, D, A>,
         cmds: &S,
         target: &mut T,
     ) -> Result<FrameStats, FlushError<T::Error>>
@@ -196,6 +211,7 @@ impl Frame {
         Z: DepthMode,
         W: WidMode,
         D: Dither,
+        A: AaMode,
         S: CommandSource + ?Sized,
         T: DrawTarget,
         T::Color: From<F::Color>,

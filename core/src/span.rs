@@ -11,6 +11,7 @@
 //! unobserved value can overflow.
 
 use crate::command::{SpanCmd, State};
+use crate::coverage::AaMode;
 use crate::dither::{quantize, round_bias, Dither};
 use crate::format::{ColorPlane, Lanes, PixelFormat};
 use crate::fragment::{DepthMode, DepthPlane, WidMode, WidPlane};
@@ -46,7 +47,9 @@ impl<L: Lanes> SpanStart<L> {
     }
 }
 
-impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Tile<N, F, Z, W, D> {
+impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither, A: AaMode>
+    Tile<N, F, Z, W, D, A>
+{
     /// Draws `n >= 1` pixels from screen `(x, y)`, which the caller has
     /// clipped to this tile.
     #[inline]

@@ -7,6 +7,7 @@
 //! the exact cost) and their per-pixel test is the constant `true`.
 
 use crate::command::{Command, State};
+use crate::coverage::{AaMode, AaPlane, NoAa};
 use crate::dither::{quantize, round_bias};
 use crate::dither::{Dither, NoDither};
 use crate::error::Error;
@@ -46,23 +47,29 @@ pub struct Tile<
     Z: DepthMode = NoDepth,
     W: WidMode = NoWid,
     D: Dither = NoDither,
+    A: AaMode = NoAa,
 > {
     pub(crate) color: F::Plane<N>,
     pub(crate) depth: Z::Plane<N>,
     pub(crate) wid: W::Plane<N>,
+    pub(crate) aa: A::Plane<N>,
     pub(crate) area: Rect,
+    /// Coverage resolved into the colour plane ([`Tile::finish`]).
+    resolved: bool,
     _dither: PhantomData<D>,
 }
 
-impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Default
-    for Tile<N, F, Z, W, D>
+impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither, A: AaMode> Default
+    for Tile<N, F, Z, W, D, A>
 {
     fn default() -> Self {
         Self::new()
     }
 }
 
-impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Tile<N, F, Z, W, D> {
+impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither, A: AaMode>
+    Tile<N, F, Z, W, D, A>
+{
     /// Pixel capacity: `8 N`.
     pub const CAPACITY: usize = 8 * N;
 
@@ -72,7 +79,9 @@ impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Tile<N
             color: ColorPlane::new(),
             depth: DepthPlane::new(),
             wid: WidPlane::new(),
+            aa: AaPlane::new(),
             area: Rect::default(),
+            resolved: false,
             _dither: PhantomData,
         }
     }
@@ -94,6 +103,7 @@ impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Tile<N
         core::mem::size_of::<F::Plane<N>>()
             + core::mem::size_of::<Z::Plane<N>>()
             + core::mem::size_of::<W::Plane<N>>()
+            + core::mem::size_of::<A::Plane<N>>()
     }
 
     /// The screen rectangle the tile currently holds.
@@ -110,13 +120,47 @@ impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Tile<N
             return Err(Error::TileTooLarge);
         }
         self.area = area;
+        self.resolved = false;
         let c = F::pack_rgb(clear.color);
         for i in 0..area.area() as usize {
             self.color.set(i, c);
             self.depth.put(i, clear.depth);
             self.wid.put(i, clear.wid);
+            if A::SAMPLES > 0 {
+                self.aa.clear(i, clear.depth, clear.color);
+            }
         }
         Ok(())
+    }
+
+    /// With coverage antialiasing ([`crate::coverage`]): resolves every
+    /// pixel's samples into the colour plane (dithered and packed like any
+    /// fragment), sets the depth plane, if any, to the nearest sample, and
+    /// returns `true` — spans and lines are then drawn over the resolved
+    /// pixels by drawing the commands again ([`crate::frame::Frame`] does).
+    /// Without, or when already resolved, it does nothing and returns `false`.
+    pub fn finish(&mut self) -> bool {
+        if A::SAMPLES == 0 || self.resolved {
+            return false;
+        }
+        let a = self.area;
+        let bias = round_bias::<D>();
+        for i in 0..a.area() as usize {
+            // Covered samples plus the background (the colour plane: the
+            // clear colour or a fill) on the uncovered ones, in the output
+            // scale with 16 fraction bits.
+            let (sum, free) = self.aa.resolve(i);
+            let bg = F::unpack(self.color.get(i));
+            let cov = F::lanes_from_rgb(sum.map(|v| (v as i64) << (COLOR_FRAC - 8)));
+            let v = cov.zip(bg, |c, b| c + ((b << COLOR_FRAC) >> 8) * free as i32 + bias);
+            let (x, y) = (a.x + (i as u32 % a.w) as i32, a.y + (i as u32 / a.w) as i32);
+            let t = D::threshold(x as u32, y as u32);
+            let raw = F::pack(v.zip(F::MAX, |v, max| quantize::<D>(v, max, t)));
+            self.color.set(i, raw);
+            self.depth.put(i, self.aa.nearest(i));
+        }
+        self.resolved = true;
+        true
     }
 
     /// Validates and draws one command, clipped to the tile.
@@ -128,6 +172,35 @@ impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Tile<N
 
     /// Draws a command already validated.
     pub(crate) fn draw_valid(&mut self, cmd: &Command) {
+        if A::SAMPLES > 0 {
+            match (self.resolved, cmd) {
+                (false, Command::Triangle { v, state }) => return self.triangle_aa(v, state),
+                (false, Command::Fill { rect, color, state }) => {
+                    // The colour plane keeps the background of the samples
+                    // no fragment covers until the tile is resolved.
+                    let (wid, c) = (state.wid, F::pack_rgb(*color));
+                    return self.for_each_pixel(rect, |t, i| {
+                        if t.wid.pass(i, wid) {
+                            t.color.set(i, c);
+                            t.aa.fill(i, *color)
+                        }
+                    });
+                }
+                (false, Command::ZFill { rect, z, state }) => {
+                    let wid = state.wid;
+                    return self.for_each_pixel(rect, |t, i| {
+                        if t.wid.pass(i, wid) {
+                            t.aa.zfill(i, *z)
+                        }
+                    });
+                }
+                (false, Command::WidFill { .. }) => {}
+                // Spans and lines go over the resolved pixels; edge
+                // antialiasing is what the coverage already does.
+                (true, Command::Span { .. } | Command::Line { .. }) => {}
+                _ => return,
+            }
+        }
         match cmd {
             Command::Triangle { v, state } => {
                 if let Some(t) = TriangleSetup::new::<F>(v) {
@@ -165,6 +238,19 @@ impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Tile<N
             }
             .advanced(x0 - xr);
             self.span(x0, py, x1 - x0, start, st);
+        });
+    }
+
+    /// A triangle through the coverage plane: one fragment per pixel of
+    /// the tile it covers any sample of ([`crate::coverage::fragments`]).
+    fn triangle_aa(&mut self, v: &[crate::command::Vertex; 3], st: &State) {
+        let a = self.area;
+        crate::coverage::fragments::<A::Pattern>(v, &a, |px, py, m, color, z| {
+            let i = ((py - a.y as i64) * a.w as i64 + (px - a.x as i64)) as usize;
+            if self.wid.pass(i, st.wid) {
+                self.aa
+                    .fragment(i, m, |k| z.at(k), Z::BITS > 0, color, st.tag);
+            }
         });
     }
 
@@ -354,8 +440,8 @@ impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Tile<N
     }
 }
 
-impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Dimensions
-    for Tile<N, F, Z, W, D>
+impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither, A: AaMode> Dimensions
+    for Tile<N, F, Z, W, D, A>
 {
     /// The tile's screen rectangle: `embedded-graphics` drawing is clipped to it.
     fn bounding_box(&self) -> Rectangle {
@@ -378,8 +464,8 @@ impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> Dimens
 /// assert_eq!(tile.pixel(9, 1), Some(Rgb565::RED));
 /// # Ok::<(), Error>(())
 /// ```
-impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither> DrawTarget
-    for Tile<N, F, Z, W, D>
+impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither, A: AaMode> DrawTarget
+    for Tile<N, F, Z, W, D, A>
 {
     type Color = F::Color;
     type Error = core::convert::Infallible;

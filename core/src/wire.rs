@@ -3,8 +3,9 @@
 //! tile without ever being copied to RAM. This layer only encodes and
 //! decodes; drawing is [`crate::tile`]'s business.
 //!
-//! Each command starts with a tag byte: the low 7 bits name the command, bit
-//! 7 says a 4-byte plane mask follows the window ID.
+//! Each command starts with a tag byte: the low 6 bits name the command, bit
+//! 7 says a 4-byte plane mask follows the window ID, bit 6 that a 2-byte
+//! object tag follows (after the mask).
 //!
 //! | tag | command | body after `wid` \[`mask`\] |
 //! | --- | --- | --- |
@@ -33,6 +34,7 @@ use crate::line::{EdgeCmd, LineCmd, LineStyle, Side};
 use crate::numeric::{ColorFix, ColorStep, Coord, ZFix, ZStep};
 
 const MASK_FLAG: u8 = 0x80;
+const TAG_FLAG: u8 = 0x40;
 
 /// Largest encoded command, in bytes.
 pub const MAX_ENCODED: usize = 64;
@@ -47,9 +49,14 @@ impl Writer<'_> {
     /// A command's tag byte and state; the plane mask only when partial.
     fn head(&mut self, tag: u8, st: &State) -> Result<(), Error> {
         let masked = st.plane_mask != u32::MAX;
-        self.put(&[tag | if masked { MASK_FLAG } else { 0 }, st.wid])?;
+        let tagged = st.tag != 0;
+        let flags = if masked { MASK_FLAG } else { 0 } | if tagged { TAG_FLAG } else { 0 };
+        self.put(&[tag | flags, st.wid])?;
         if masked {
             self.put(&st.plane_mask.to_le_bytes())?;
+        }
+        if tagged {
+            self.put(&st.tag.to_le_bytes())?;
         }
         Ok(())
     }
@@ -138,7 +145,15 @@ impl Reader<'_> {
         } else {
             u32::MAX
         };
-        Ok((tag, State { wid, plane_mask }))
+        let obj = if tag & TAG_FLAG != 0 { self.u16()? } else { 0 };
+        Ok((
+            tag,
+            State {
+                wid,
+                plane_mask,
+                tag: obj,
+            },
+        ))
     }
     fn rect(&mut self) -> Result<Rect, Error> {
         Ok(Rect::new(
@@ -242,7 +257,7 @@ pub fn encode(cmd: &Command, buf: &mut [u8]) -> Result<usize, Error> {
 pub fn decode(buf: &[u8]) -> Result<(Command, usize), Error> {
     let mut r = Reader { buf, pos: 0 };
     let (tag, state) = r.head()?;
-    let cmd = match tag & !MASK_FLAG {
+    let cmd = match tag & !(MASK_FLAG | TAG_FLAG) {
         t @ (1 | 2) => {
             let v = [r.vertex(t == 2)?, r.vertex(t == 2)?, r.vertex(t == 2)?];
             Command::Triangle { v, state }
@@ -314,7 +329,7 @@ pub fn decode(buf: &[u8]) -> Result<(Command, usize), Error> {
             z: r.u16()?,
             state,
         },
-        6 if tag & MASK_FLAG == 0 => Command::WidFill {
+        6 if tag & (MASK_FLAG | TAG_FLAG) == 0 => Command::WidFill {
             rect: r.rect()?,
             wid: state.wid,
         },
@@ -469,7 +484,7 @@ impl<'a> Encoded<'a> {
                 }
             }
             let first = *rest.first()?;
-            let step = if first & !MASK_FLAG == 7 {
+            let step = if first & !(MASK_FLAG | TAG_FLAG) == 7 {
                 mesh_record(rest).map(|(m, n)| {
                     mesh = Some(m);
                     (None, n)

@@ -45,6 +45,7 @@ fn config(w: u16, h: u16) -> Config {
         depth: false,
         wid: false,
         clear: Clear::default(),
+        aa: crate::render::AaKind::None,
     }
 }
 
@@ -139,7 +140,7 @@ pub fn solids(tris: &[[Vertex; 3]], aa: bool) -> Vec<Command> {
 }
 
 /// An RGB888 image as an `embedded-graphics` target.
-struct Canvas(Image);
+pub(crate) struct Canvas(pub(crate) Image);
 
 impl embedded_graphics::prelude::OriginDimensions for Canvas {
     fn size(&self) -> embedded_graphics::prelude::Size {

@@ -12,10 +12,11 @@ pub mod mesh;
 pub mod metrics;
 pub mod reference;
 pub mod render;
+pub mod ruf;
 /// The deterministic PRNG, shared with the firmware workloads.
 pub use tilerast_fw::rng;
 pub mod scene;
 
 pub use image::Image;
-pub use render::{render, Config, FormatKind, Rendered};
+pub use render::{render, AaKind, Config, FormatKind, Rendered};
 pub use scene::Scene;

@@ -54,6 +54,10 @@ enum Cmd {
         /// triangle and mesh: `on` or `off`.
         #[arg(long, value_enum)]
         edge_aa: Option<OnOff>,
+        /// Override the coverage antialiasing mode (seed 000): none, the RUF
+        /// buffer with 4/8/16 samples, or supersampling.
+        #[arg(long, value_enum)]
+        aa: Option<tilerast_sim::AaKind>,
     },
     /// Render a scene with the f64 reference renderer.
     Reference {
@@ -91,6 +95,22 @@ enum Cmd {
         #[arg(long, default_value = "reports/aa.png")]
         image: PathBuf,
     },
+    /// Reproduce the RUF-buffer paper's Tables 1-4 on the OBJ models:
+    /// Markdown tables, a chart of Table 2 and the renders side by side.
+    RufReport {
+        /// Folder of OBJ models (every `.obj` in it, by name).
+        #[arg(long, default_value = "../shared/models")]
+        models: PathBuf,
+        /// Markdown output.
+        #[arg(short, long, default_value = "reports/ruf.md")]
+        output: PathBuf,
+        /// Chart of Table 2.
+        #[arg(long, default_value = "reports/ruf_chart.png")]
+        chart: PathBuf,
+        /// Renders: per model 1p, 8ss, RUF-8, 4x4 and the 8x8 reference.
+        #[arg(long, default_value = "reports/ruf_models.png")]
+        renders: PathBuf,
+    },
     /// Compare two PNGs: seed 000 eq. 8 colour error, PSNR, max abs error.
     Compare {
         /// Test image.
@@ -108,8 +128,12 @@ fn run(cli: Cli) -> Result<(), String> {
             reference: ref_out,
             line_aa,
             edge_aa,
+            aa,
         } => {
             let mut s = Scene::load(&scene)?;
+            if let Some(aa) = aa {
+                s.config.aa = aa;
+            }
             if let Some(mode) = line_aa {
                 s.set_line_aa(matches!(mode, LineAa::Wu));
             }
@@ -135,11 +159,12 @@ fn run(cli: Cli) -> Result<(), String> {
                 "none".into()
             };
             println!(
-                "pipeline   tile {}x{}, dither {dither}, Z plane {}, window-ID plane {}",
+                "pipeline   tile {}x{}, dither {dither}, Z plane {}, window-ID plane {}, coverage AA {}",
                 c.tile.0,
                 c.tile.1,
                 if c.depth { "16-bit" } else { "none" },
-                if c.wid { "8-bit" } else { "none" }
+                if c.wid { "8-bit" } else { "none" },
+                c.aa.name()
             );
             println!("RAM        {} bits/pixel -> {} bytes per tile (a full frame buffer would be {} bytes)",
                 r.bits_per_pixel, r.tile_bytes(c), (c.width as u64 * c.height as u64 * r.bits_per_pixel as u64).div_ceil(8));
@@ -210,6 +235,56 @@ fn run(cli: Cli) -> Result<(), String> {
             tilerast_sim::aa::montage(&groups, 2).save_png(&image)?;
             print!("{table}");
             println!("wrote {} and {}", output.display(), image.display());
+        }
+        Cmd::RufReport {
+            models,
+            output,
+            chart,
+            renders,
+        } => {
+            let mut objs: Vec<PathBuf> = std::fs::read_dir(&models)
+                .map_err(|e| format!("{}: {e}", models.display()))?
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.extension().is_some_and(|x| x == "obj"))
+                .collect();
+            objs.sort();
+            let mut results = Vec::new();
+            for obj in &objs {
+                eprintln!("measuring {}", obj.display());
+                results.push(tilerast_sim::ruf::measure(obj)?);
+            }
+            let md = tilerast_sim::ruf::markdown(&results)
+                + &format!(
+                    "\nChart: `{}`. Renders (per model: 1p, 8ss, RUF-8, 4x4, 8x8 reference): `{}`.\n",
+                    chart.display(),
+                    renders.display()
+                );
+            for p in [&output, &chart, &renders] {
+                if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
+                    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+                }
+            }
+            std::fs::write(&output, &md).map_err(|e| format!("{}: {e}", output.display()))?;
+            tilerast_sim::ruf::chart(&results).save_png(&chart)?;
+            let rows: Vec<(Image, Vec<tilerast_sim::aa::Measured>)> = results
+                .iter()
+                .map(|r| {
+                    let mut imgs = r.images.clone();
+                    let first = imgs.remove(0);
+                    let rest = imgs
+                        .into_iter()
+                        .map(|image| tilerast_sim::aa::Measured {
+                            subject: r.name.clone(),
+                            mode: String::new(),
+                            diff: tilerast_sim::metrics::compare(&image, &image).expect("same"),
+                            image,
+                        })
+                        .collect();
+                    (first, rest)
+                })
+                .collect();
+            tilerast_sim::aa::montage(&rows, 1).save_png(&renders)?;
+            print!("{md}");
         }
         Cmd::Compare { a, b } => {
             let d = metrics::compare(&Image::load_png(&a)?, &Image::load_png(&b)?)?;

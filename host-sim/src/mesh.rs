@@ -59,6 +59,13 @@ pub struct MeshSpec {
     /// Depth bias of the wireframe, in 16-bit Z units.
     #[serde(default = "default_bias")]
     pub wire_bias: u16,
+    /// Drop the triangles that face away from the camera (OBJ fronts wind
+    /// counter-clockwise), as the geometry stage of a renderer with
+    /// back-face culling would. Closed meshes look the same with fewer
+    /// fragments; coverage antialiasing (the RUF buffer) needs it to see
+    /// one surface per object in a pixel.
+    #[serde(default)]
+    pub cull_back: bool,
     /// Antialias the silhouette and open boundary of the shaded faces
     /// (seed 003 eq. 8): their edges are drawn after every solid of the scene.
     #[serde(default)]
@@ -106,6 +113,8 @@ pub struct MeshStats {
     pub lines: usize,
     /// Silhouette and boundary edges found for edge antialiasing.
     pub edges: usize,
+    /// Triangles culled as back faces.
+    pub culled: usize,
 }
 
 /// The edges of a triangle set that border something else on screen: those
@@ -183,6 +192,7 @@ pub fn load(
     screen: (u16, u16),
     out: &mut Vec<Command>,
     edges: &mut Vec<Command>,
+    tags: &mut u16,
 ) -> Result<MeshStats, String> {
     let path = base.join(&spec.obj);
     let opts = tobj::LoadOptions {
@@ -294,8 +304,11 @@ pub fn load(
                 .ok()
             })
             .collect();
+        // One object tag per OBJ group (seed 000: fragments of one object
+        // merge in the RUF buffer).
         let state = State {
             wid: spec.window,
+            tag: crate::scene::next_tag(tags),
             ..State::default()
         };
         let mut wire = std::collections::BTreeSet::new();
@@ -303,6 +316,17 @@ pub fn load(
             stats.triangles += 1;
             match [t[0], t[1], t[2]].map(|i| verts[i as usize]) {
                 [Some(a), Some(b), Some(c)] => {
+                    let area = |a: Vertex, b: Vertex, c: Vertex| {
+                        let p = |v: Vertex| (v.x.to_bits() as i64, v.y.to_bits() as i64);
+                        let (a, b, c) = (p(a), p(b), p(c));
+                        (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0)
+                    };
+                    // OBJ fronts wind counter-clockwise seen from outside:
+                    // clockwise on the y-down screen, a negative area here.
+                    if spec.cull_back && area(a, b, c) >= 0 {
+                        stats.culled += 1;
+                        continue;
+                    }
                     if spec.faces {
                         out.push(Command::Triangle {
                             v: [a, b, c],

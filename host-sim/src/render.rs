@@ -3,6 +3,7 @@
 //! the host pays the monomorphization, the firmware picks one.
 
 use embedded_graphics_core::pixelcolor::Rgb888;
+use tilerast::coverage::AaMode;
 use tilerast::prelude::*;
 
 /// Pixel capacity of the simulator's tile, in groups of 8: 98,304 pixels
@@ -61,7 +62,87 @@ pub struct Config {
     pub wid: bool,
     /// Tile clear values.
     pub clear: Clear,
+    /// Coverage antialiasing.
+    pub aa: AaKind,
 }
+
+/// Coverage antialiasing modes by name ([`tilerast::coverage`]).
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Deserialize,
+    serde::Serialize,
+    clap::ValueEnum,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum AaKind {
+    /// None: one sample at the pixel centre, no coverage plane.
+    #[default]
+    None,
+    /// RUF buffer, 4 sparse samples.
+    Ruf4,
+    /// RUF buffer, 8 sparse samples (the paper's).
+    Ruf8,
+    /// RUF buffer, 16 sparse samples.
+    Ruf16,
+    /// Supersampling, 4 sparse samples.
+    Ss4,
+    /// Supersampling, 8 sparse samples (the paper's "8ss").
+    Ss8,
+    /// Supersampling, 16 sparse samples.
+    Ss16,
+    /// Supersampling, regular 4x4 grid.
+    Grid4,
+    /// Supersampling, regular 8x8 grid (the paper's reference).
+    Grid8,
+}
+
+impl AaKind {
+    /// Every mode.
+    pub const ALL: [AaKind; 9] = [
+        AaKind::None,
+        AaKind::Ruf4,
+        AaKind::Ruf8,
+        AaKind::Ruf16,
+        AaKind::Ss4,
+        AaKind::Ss8,
+        AaKind::Ss16,
+        AaKind::Grid4,
+        AaKind::Grid8,
+    ];
+    /// The name in scene files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            AaKind::None => "none",
+            AaKind::Ruf4 => "ruf4",
+            AaKind::Ruf8 => "ruf8",
+            AaKind::Ruf16 => "ruf16",
+            AaKind::Ss4 => "ss4",
+            AaKind::Ss8 => "ss8",
+            AaKind::Ss16 => "ss16",
+            AaKind::Grid4 => "grid4",
+            AaKind::Grid8 => "grid8",
+        }
+    }
+    /// Samples per pixel (1 for none).
+    pub fn samples(self) -> u32 {
+        match self {
+            AaKind::None => 1,
+            AaKind::Ruf4 | AaKind::Ss4 => 4,
+            AaKind::Ruf8 | AaKind::Ss8 => 8,
+            AaKind::Ruf16 | AaKind::Ss16 | AaKind::Grid4 => 16,
+            AaKind::Grid8 => 64,
+        }
+    }
+}
+
+/// Pixel capacity of the simulator's tile with a coverage plane, in groups
+/// of 8: 2,048 pixels (an 8x8 grid costs 320 bytes a pixel).
+pub const AA_GROUPS: usize = 256;
 
 /// A rendered frame.
 #[derive(Debug, Clone)]
@@ -89,38 +170,98 @@ impl Rendered {
 
 /// Renders `cmds` in tiles as the firmware would.
 pub fn render(cfg: &Config, cmds: &[Command]) -> Result<Rendered, Error> {
-    match cfg.format {
-        FormatKind::Rgb888 => by_depth::<Rgb888Format>(cfg, cmds),
-        FormatKind::Rgb565 => by_depth::<Rgb565Format>(cfg, cmds),
-        FormatKind::Rgb444 => by_depth::<Rgb444Format>(cfg, cmds),
-        FormatKind::Gray8 => by_depth::<Gray8Format>(cfg, cmds),
-        FormatKind::Binary => by_depth::<BinaryFormat>(cfg, cmds),
+    use tilerast::coverage::*;
+    match cfg.aa {
+        AaKind::None => by_format::<NoAa, SIM_GROUPS>(cfg, cmds),
+        AaKind::Ruf4 => aa_format::<Ruf4>(cfg, cmds),
+        AaKind::Ruf8 => aa_format::<Ruf8>(cfg, cmds),
+        AaKind::Ruf16 => aa_format::<Ruf16>(cfg, cmds),
+        AaKind::Ss4 => aa_format::<Ss4>(cfg, cmds),
+        AaKind::Ss8 => aa_format::<Ss8>(cfg, cmds),
+        AaKind::Ss16 => aa_format::<Ss16>(cfg, cmds),
+        AaKind::Grid4 => aa_format::<SsGrid4>(cfg, cmds),
+        AaKind::Grid8 => aa_format::<SsGrid8>(cfg, cmds),
     }
 }
 
-fn by_depth<F: PixelFormat>(cfg: &Config, cmds: &[Command]) -> Result<Rendered, Error>
+fn by_format<A: AaMode, const G: usize>(cfg: &Config, cmds: &[Command]) -> Result<Rendered, Error> {
+    match cfg.format {
+        FormatKind::Rgb888 => by_depth::<Rgb888Format, A, G>(cfg, cmds),
+        FormatKind::Rgb565 => by_depth::<Rgb565Format, A, G>(cfg, cmds),
+        FormatKind::Rgb444 => by_depth::<Rgb444Format, A, G>(cfg, cmds),
+        FormatKind::Gray8 => by_depth::<Gray8Format, A, G>(cfg, cmds),
+        FormatKind::Binary => by_depth::<BinaryFormat, A, G>(cfg, cmds),
+    }
+}
+
+fn by_depth<F: PixelFormat, A: AaMode, const G: usize>(
+    cfg: &Config,
+    cmds: &[Command],
+) -> Result<Rendered, Error>
 where
     Rgb888: From<F::Color>,
 {
     if cfg.depth {
-        by_wid::<F, Depth16>(cfg, cmds)
+        by_wid::<F, Depth16, A, G>(cfg, cmds)
     } else {
-        by_wid::<F, NoDepth>(cfg, cmds)
+        by_wid::<F, NoDepth, A, G>(cfg, cmds)
     }
 }
 
-fn by_wid<F: PixelFormat, Z: DepthMode>(cfg: &Config, cmds: &[Command]) -> Result<Rendered, Error>
+/// With coverage antialiasing the simulator builds fewer tile types, to
+/// keep its build time in check: the depth test is always on (a depth per
+/// sample; the depth plane then holds each pixel's nearest sample for the
+/// lines drawn over the resolved image), and the dithers are the ones
+/// the scenes use (none, 4x4, 8x8).
+fn aa_format<A: AaMode>(cfg: &Config, cmds: &[Command]) -> Result<Rendered, Error> {
+    fn wid<F: PixelFormat, A: AaMode>(cfg: &Config, cmds: &[Command]) -> Result<Rendered, Error>
+    where
+        Rgb888: From<F::Color>,
+    {
+        if cfg.wid {
+            dither::<F, Wid8, A>(cfg, cmds)
+        } else {
+            dither::<F, NoWid, A>(cfg, cmds)
+        }
+    }
+    fn dither<F: PixelFormat, W: WidMode, A: AaMode>(
+        cfg: &Config,
+        cmds: &[Command],
+    ) -> Result<Rendered, Error>
+    where
+        Rgb888: From<F::Color>,
+    {
+        match cfg.dither {
+            0 | 1 => run::<F, Depth16, W, NoDither, A, AA_GROUPS>(cfg, cmds),
+            4 => run::<F, Depth16, W, Bayer4, A, AA_GROUPS>(cfg, cmds),
+            8 => run::<F, Depth16, W, Bayer8, A, AA_GROUPS>(cfg, cmds),
+            _ => Err(Error::BadSize),
+        }
+    }
+    match cfg.format {
+        FormatKind::Rgb888 => wid::<Rgb888Format, A>(cfg, cmds),
+        FormatKind::Rgb565 => wid::<Rgb565Format, A>(cfg, cmds),
+        FormatKind::Rgb444 => wid::<Rgb444Format, A>(cfg, cmds),
+        FormatKind::Gray8 => wid::<Gray8Format, A>(cfg, cmds),
+        FormatKind::Binary => wid::<BinaryFormat, A>(cfg, cmds),
+    }
+}
+
+fn by_wid<F: PixelFormat, Z: DepthMode, A: AaMode, const G: usize>(
+    cfg: &Config,
+    cmds: &[Command],
+) -> Result<Rendered, Error>
 where
     Rgb888: From<F::Color>,
 {
     if cfg.wid {
-        by_dither::<F, Z, Wid8>(cfg, cmds)
+        by_dither::<F, Z, Wid8, A, G>(cfg, cmds)
     } else {
-        by_dither::<F, Z, NoWid>(cfg, cmds)
+        by_dither::<F, Z, NoWid, A, G>(cfg, cmds)
     }
 }
 
-fn by_dither<F: PixelFormat, Z: DepthMode, W: WidMode>(
+fn by_dither<F: PixelFormat, Z: DepthMode, W: WidMode, A: AaMode, const G: usize>(
     cfg: &Config,
     cmds: &[Command],
 ) -> Result<Rendered, Error>
@@ -128,25 +269,35 @@ where
     Rgb888: From<F::Color>,
 {
     match cfg.dither {
-        0 | 1 => run::<F, Z, W, NoDither>(cfg, cmds),
-        2 => run::<F, Z, W, Bayer2>(cfg, cmds),
-        4 => run::<F, Z, W, Bayer4>(cfg, cmds),
-        8 => run::<F, Z, W, Bayer8>(cfg, cmds),
-        16 => run::<F, Z, W, Bayer<4>>(cfg, cmds),
+        0 | 1 => run::<F, Z, W, NoDither, A, G>(cfg, cmds),
+        2 => run::<F, Z, W, Bayer2, A, G>(cfg, cmds),
+        4 => run::<F, Z, W, Bayer4, A, G>(cfg, cmds),
+        8 => run::<F, Z, W, Bayer8, A, G>(cfg, cmds),
+        16 => run::<F, Z, W, Bayer<4>, A, G>(cfg, cmds),
         _ => Err(Error::BadSize),
     }
 }
 
-fn run<F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither>(
+fn run<F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither, A: AaMode, const G: usize>(
     cfg: &Config,
     cmds: &[Command],
 ) -> Result<Rendered, Error>
 where
     Rgb888: From<F::Color>,
 {
-    let mut frame = Frame::new(cfg.width, cfg.height, cfg.tile.0, cfg.tile.1)?;
+    // A coverage tile holds fewer pixels: shrink the tile if needed (the
+    // output does not depend on the tiling).
+    let (mut tw, mut th) = cfg.tile;
+    while tw as usize * th as usize > G * 8 {
+        if tw >= th {
+            tw = tw.div_ceil(2);
+        } else {
+            th = th.div_ceil(2);
+        }
+    }
+    let mut frame = Frame::new(cfg.width, cfg.height, tw, th)?;
     frame.clear = cfg.clear;
-    let mut tile: Box<Tile<SIM_GROUPS, F, Z, W, D>> = Box::default();
+    let mut tile: Box<Tile<G, F, Z, W, D, A>> = Box::default();
     let (w, h) = (cfg.width as u32, cfg.height as u32);
     let mut image = Image::new(w, h);
     let mut raw = vec![0u32; (w * h) as usize];
@@ -174,7 +325,7 @@ where
         image,
         raw,
         depth,
-        bits_per_pixel: Tile::<SIM_GROUPS, F, Z, W, D>::bits_per_pixel(),
+        bits_per_pixel: Tile::<G, F, Z, W, D, A>::bits_per_pixel(),
         stats,
     })
 }

@@ -11,6 +11,8 @@
 //! depth = true               # 16-bit Z plane (default: true)
 //! window_ids = true          # 8-bit window-ID plane (default: on when windows exist)
 //! background = [16, 16, 32]  # clear colour
+//! aa = "ruf8"                # coverage antialiasing: none | ruf4 | ruf8 | ruf16 |
+//!                            # ss1 | ss4 | ss8 | ss16 | grid4 | grid8 (default none)
 //!
 //! [[window]]                 # claims a rectangle for a window ID, in order
 //! id = 1
@@ -106,6 +108,8 @@ struct ScreenSpec {
     window_ids: Option<bool>,
     #[serde(default)]
     background: [u8; 3],
+    #[serde(default)]
+    aa: crate::render::AaKind,
 }
 
 fn default_tile() -> [u16; 2] {
@@ -242,6 +246,12 @@ pub struct Scene {
     edges: Vec<(bool, Command)>,
 }
 
+/// The next object tag (wrapping past 65535 back to 1).
+pub(crate) fn next_tag(tags: &mut u16) -> u16 {
+    *tags = tags.checked_add(1).unwrap_or(1);
+    *tags
+}
+
 fn line_of(src: &str, offset: usize) -> usize {
     src[..offset.min(src.len())]
         .bytes()
@@ -268,6 +278,7 @@ fn state(window: u8, mask: Option<u32>) -> State {
     State {
         wid: window,
         plane_mask: mask.unwrap_or(u32::MAX),
+        tag: 0,
     }
 }
 
@@ -331,11 +342,15 @@ impl Scene {
                 color: Rgb::new(r, g, b),
                 ..Clear::default()
             },
+            aa: s.aa,
         };
         let mut commands = Vec::new();
         let mut notes = Vec::new();
         let mut mesh_stats = MeshStats::default();
         let mut edges = Vec::new();
+        // Object tags for coverage antialiasing: one per triangle of the
+        // file and per OBJ group, from 1.
+        let mut tags = 0u16;
         for w in &file.window {
             let line = line_of(src, w.span().start);
             let w = w.get_ref();
@@ -384,7 +399,11 @@ impl Scene {
                             Vertex::try_from_f32(p[0] as f32, p[1] as f32, z.round() as u16, color)
                                 .map_err(|e| at(format!("vertex {k}: {e}")))?;
                     }
-                    let st = state(*window, *plane_mask);
+                    // Each triangle of the file is an object of its own.
+                    let st = State {
+                        tag: next_tag(&mut tags),
+                        ..state(*window, *plane_mask)
+                    };
                     for i in 0..3 {
                         let edge = tilerast::line::EdgeCmd::of_triangle(&vs, i);
                         edges.push((*edge_aa, Command::Edge { edge, state: st }));
@@ -517,6 +536,7 @@ impl Scene {
                         (config.width, config.height),
                         &mut commands,
                         &mut found,
+                        &mut tags,
                     )
                     .map_err(at)?;
                     edges.extend(found.into_iter().map(|e| (spec.edge_aa, e)));

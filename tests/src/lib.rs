@@ -51,6 +51,7 @@ pub fn config(w: u16, h: u16, format: FormatKind) -> Config {
         depth: false,
         wid: false,
         clear: Clear::default(),
+        aa: tilerast_sim::AaKind::None,
     }
 }
 
@@ -88,6 +89,7 @@ pub fn random_command(rng: &mut Rng, wid: u8) -> Command {
     let state = State {
         wid,
         plane_mask: mask,
+        tag: rng.range(0, 4) as u16,
     };
     match rng.range(0, 7) {
         6 => {

@@ -28,3 +28,8 @@ fn lines_match_golden() {
 fn edges_match_golden() {
     check("edges");
 }
+
+#[test]
+fn ruf_matches_golden() {
+    check("ruf");
+}

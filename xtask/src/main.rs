@@ -302,6 +302,19 @@ fn bench() -> Result<(), String> {
             "--image",
             "reports/aa.png",
         ],
+    )?;
+    // The RUF-buffer paper's tables (seed 000).
+    run(
+        "cargo",
+        &[
+            "run",
+            "--release",
+            "-q",
+            "-p",
+            "tilerast-sim",
+            "--",
+            "ruf-report",
+        ],
     )
 }
 
