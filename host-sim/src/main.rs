@@ -132,6 +132,13 @@ fn run(cli: Cli) -> Result<(), String> {
         } => {
             let mut s = Scene::load(&scene)?;
             if let Some(aa) = aa {
+                if aa != tilerast_sim::AaKind::None && ![0, 4, 8].contains(&s.config.dither) {
+                    return Err(format!(
+                        "--aa {}: the simulator builds coverage antialiasing with dither 0, 4 or 8, and this scene uses {}",
+                        aa.name(),
+                        s.config.dither
+                    ));
+                }
                 s.config.aa = aa;
             }
             if let Some(mode) = line_aa {

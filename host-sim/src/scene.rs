@@ -329,6 +329,13 @@ impl Scene {
                 s.dither
             ));
         }
+        if s.aa != crate::render::AaKind::None && ![0, 4, 8].contains(&s.dither) {
+            return Err(format!(
+                "1: [screen] coverage antialiasing (aa = \"{}\") is built into the simulator with dither 0, 4 or 8, not {}",
+                s.aa.name(),
+                s.dither
+            ));
+        }
         let [r, g, b] = s.background;
         let config = Config {
             width: s.width,
