@@ -252,15 +252,7 @@ impl Command {
     /// the cell may be inside), otherwise [`Command::bounds`].
     pub fn coverage_bounds(&self) -> Option<Rect> {
         match self {
-            Command::Triangle { v, .. } => {
-                let cells = |f: fn(&Vertex) -> i32| {
-                    let lo = v.iter().map(f).min().unwrap_or(0) >> 4;
-                    let hi = v.iter().map(f).max().unwrap_or(0) >> 4;
-                    (lo, (hi - lo + 1) as u32)
-                };
-                let ((x, w), (y, h)) = (cells(|v| v.x.to_bits()), cells(|v| v.y.to_bits()));
-                Some(Rect::new(x, y, w, h))
-            }
+            Command::Triangle { v, .. } => Some(crate::setup::cell_bounds(v)),
             _ => self.bounds(),
         }
     }

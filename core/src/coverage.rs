@@ -45,7 +45,7 @@ use crate::command::Vertex;
 use crate::format::Rgb;
 use crate::geom::Rect;
 use crate::numeric::{div_round, SUBPIXEL};
-use crate::setup::oriented_edges;
+use crate::setup::{cell_bounds, oriented_edges};
 
 /// A set of sample positions in a pixel.
 pub trait SamplePattern: Copy + Default + core::fmt::Debug {
@@ -256,18 +256,10 @@ pub fn fragments<P: SamplePattern>(
         return;
     };
     let vv = if swapped { [v[0], v[2], v[1]] } else { *v };
-    let cells = |f: fn(&Vertex) -> i32| {
-        let (lo, hi) = vv
-            .iter()
-            .map(f)
-            .fold((i32::MAX, i32::MIN), |(l, h), x| (l.min(x), h.max(x)));
-        // Pixels whose cell [16 p, 16 p + 16) meets [lo, hi].
-        ((lo >> 4) as i64, (hi >> 4) as i64)
+    let Some(r) = cell_bounds(v).intersect(clip) else {
+        return;
     };
-    let (x0, x1) = cells(|v| v.x.to_bits());
-    let (y0, y1) = cells(|v| v.y.to_bits());
-    let (x0, x1) = (x0.max(clip.x as i64), x1.min(clip.x1() - 1));
-    let (y0, y1) = (y0.max(clip.y as i64), y1.min(clip.y1() - 1));
+    let (x0, x1, y0, y1) = (r.x as i64, r.x1() - 1, r.y as i64, r.y1() - 1);
     let s = SUBPIXEL;
     let cs = vv.map(|v| [v.color.r, v.color.g, v.color.b].map(|c| c as i64));
     let range = |ch: usize| {

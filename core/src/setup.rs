@@ -95,6 +95,18 @@ pub(crate) fn pixel_bounds(v: &[Vertex; 3]) -> Option<Rect> {
     (x0 <= x1 && y0 <= y1).then(|| Rect::new(x0, y0, (x1 - x0 + 1) as u32, (y1 - y0 + 1) as u32))
 }
 
+/// The pixels whose cells `[16 p, 16 p + 16)` the triangle's box meets:
+/// every pixel any sample of which can be inside (coverage antialiasing).
+pub(crate) fn cell_bounds(v: &[Vertex; 3]) -> Rect {
+    let cells = |f: fn(&Vertex) -> i32| {
+        let lo = v.iter().map(f).min().unwrap_or(0) >> SUBPIXEL_BITS;
+        let hi = v.iter().map(f).max().unwrap_or(0) >> SUBPIXEL_BITS;
+        (lo, (hi - lo + 1) as u32)
+    };
+    let ((x, w), (y, h)) = (cells(|v| v.x.to_bits()), cells(|v| v.y.to_bits()));
+    Rect::new(x, y, w, h)
+}
+
 /// The edges of a triangle oriented so that the inside is `E >= bias`
 /// (`e[i]` opposite vertex `i`), its doubled area and whether the second and
 /// third vertices were swapped to get there; `None` for zero area.

@@ -67,7 +67,7 @@ enum Cmd {
         /// filter): lines as 1-pixel-wide rectangles, solids by exact area,
         /// no edge antialiasing commands. 1 renders the pipeline's own
         /// semantics (pixel centres, two-point lines, eq. 8 edges).
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=64))]
         samples: u32,
         /// Output PNG.
         #[arg(short, long, default_value = "reference.png")]

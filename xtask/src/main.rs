@@ -284,38 +284,23 @@ fn bench() -> Result<(), String> {
     std::fs::create_dir_all("reports").map_err(|e| e.to_string())?;
     std::fs::write("reports/bench.md", &md).map_err(|e| e.to_string())?;
     println!("{md}");
-    // The quality axis of the same modes: error against the ideal.
-    run(
-        "cargo",
-        &[
-            "run",
-            "--release",
-            "-q",
-            "-p",
-            "tilerast-sim",
-            "--",
-            "aa-report",
-            "scenes/edges.toml",
-            "scenes/demo.toml",
-            "-o",
-            "reports/aa.md",
-            "--image",
-            "reports/aa.png",
-        ],
-    )?;
-    // The RUF-buffer paper's tables (seed 000).
-    run(
-        "cargo",
-        &[
-            "run",
-            "--release",
-            "-q",
-            "-p",
-            "tilerast-sim",
-            "--",
-            "ruf-report",
-        ],
-    )
+    // The quality axis of the same modes: error against the ideal, and
+    // the RUF-buffer paper's tables (seed 000).
+    let sim = |args: &[&str]| {
+        let mut all = vec!["run", "--release", "-q", "-p", "tilerast-sim", "--"];
+        all.extend_from_slice(args);
+        run("cargo", &all)
+    };
+    sim(&[
+        "aa-report",
+        "scenes/edges.toml",
+        "scenes/demo.toml",
+        "-o",
+        "reports/aa.md",
+        "--image",
+        "reports/aa.png",
+    ])?;
+    sim(&["ruf-report"])
 }
 
 /// Runs the firmware under QEMU and writes `reports/targets.md`.
