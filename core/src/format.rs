@@ -120,6 +120,17 @@ impl Cell for u16 {
     }
 }
 
+impl Cell for u32 {
+    #[inline(always)]
+    fn to_u32(self) -> u32 {
+        self
+    }
+    #[inline(always)]
+    fn from_u32(v: u32) -> Self {
+        v
+    }
+}
+
 /// Three bytes, `0xRRGGBB` order: RGB888 without padding.
 impl Cell for [u8; 3] {
     #[inline(always)]

@@ -5,21 +5,34 @@
 //! then replaces (read-modify-write, as REjr's Z channel). Either plane can be
 //! absent: `NoDepth` and `NoWid` store `()`, and their tests are the constant
 //! `true`, so the inner loop carries no trace of them.
+//!
+//! **Depth bits.** The Z DDA carries 16.14 fixed point ([`crate::numeric`]).
+//! [`Depth16`] keeps the integer part (rounded): vertex depths are `u16`,
+//! so surfaces closer than one unit tie, and the first drawn wins.
+//! [`Depth24`] and [`Depth32`] keep 8 and 14 fraction bits of the
+//! interpolated value as well, for scenes with close or intersecting
+//! surfaces; they cost 1 and 2 more bytes a pixel (`tilerast-sim tradeoff`
+//! measures what that buys).
 
 use crate::format::{Cell, ColorPlane, Plane};
+use core::marker::PhantomData;
 
 /// Depth-plane storage.
 pub trait DepthPlane {
     /// A new plane (contents are set by the tile's clear).
     fn new() -> Self;
-    /// Sets pixel `i` to `z`.
+    /// Sets pixel `i` to the integer depth `z` (clears, Z fills, resolved
+    /// coverage).
     fn put(&mut self, i: usize, z: u16);
-    /// Reads pixel `i` (65535 when there is no plane).
+    /// Reads pixel `i`'s integer depth, rounded down (65535 when there is
+    /// no plane).
     fn read(&self, i: usize) -> u16;
-    /// The Z test: passes and stores when `z` is less than the stored value.
-    fn test_and_set(&mut self, i: usize, z: u16) -> bool;
+    /// The Z test of an interpolated depth `z` (16.14, rounding bias of
+    /// half a unit included): passes and stores when `z` is less than the
+    /// stored value at the plane's precision.
+    fn test_and_set(&mut self, i: usize, z: i32) -> bool;
     /// The Z test without the write (partial-coverage fragments).
-    fn test(&self, i: usize, z: u16) -> bool;
+    fn test(&self, i: usize, z: i32) -> bool;
 }
 
 /// Window-ID plane storage.
@@ -50,9 +63,23 @@ pub trait WidMode: 'static {
     const BITS: u32;
 }
 
-/// 16-bit Z plane, less-than test.
+/// A Z plane of cells `T` holding depth with `FRAC` fraction bits (16.`FRAC`),
+/// less-than test: [`Depth16`], [`Depth24`], [`Depth32`].
+///
+/// ```
+/// use tilerast::prelude::*;
+/// assert_eq!(Tile::<64, Rgb565Format, Depth16>::bits_per_pixel(), 16 + 16);
+/// assert_eq!(Tile::<64, Rgb565Format, Depth24>::bits_per_pixel(), 16 + 24);
+/// assert_eq!(Tile::<64, Rgb565Format, Depth32>::bits_per_pixel(), 16 + 32);
+/// ```
 #[derive(Debug, Clone, Copy, Default)]
-pub struct Depth16;
+pub struct DepthBits<T, const FRAC: u32>(PhantomData<T>);
+/// 16-bit Z plane: integer depth.
+pub type Depth16 = DepthBits<u16, 0>;
+/// 24-bit Z plane (three bytes): depth in 16.8.
+pub type Depth24 = DepthBits<[u8; 3], 8>;
+/// 32-bit Z plane: depth in 16.14, every bit the DDA has.
+pub type Depth32 = DepthBits<u32, 14>;
 /// No depth plane: every fragment passes.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct NoDepth;
@@ -63,9 +90,9 @@ pub struct Wid8;
 #[derive(Debug, Clone, Copy, Default)]
 pub struct NoWid;
 
-impl DepthMode for Depth16 {
-    type Plane<const N: usize> = Plane<u16, N>;
-    const BITS: u32 = 16;
+impl<T: Cell + 'static, const FRAC: u32> DepthMode for DepthBits<T, FRAC> {
+    type Plane<const N: usize> = ZPlane<T, FRAC, N>;
+    const BITS: u32 = 8 * core::mem::size_of::<T>() as u32;
 }
 impl DepthMode for NoDepth {
     type Plane<const N: usize> = ();
@@ -80,27 +107,43 @@ impl WidMode for NoWid {
     const BITS: u32 = 0;
 }
 
-impl<const N: usize> DepthPlane for Plane<u16, N> {
+/// Storage of a [`DepthBits`] plane: depth in 16.`FRAC` in cells `T`.
+pub struct ZPlane<T, const FRAC: u32, const N: usize>(Plane<T, N>);
+
+impl<T: Cell, const FRAC: u32, const N: usize> ZPlane<T, FRAC, N> {
+    /// Largest stored value: 65535 with every fraction bit set.
+    const MAX: u32 = (0x1_0000 << FRAC) - 1;
+
+    /// An interpolated 16.14 depth at the plane's precision. The DDA keeps
+    /// `z <= 2^30 + 2^13` plus its drift; clamp anyway: never wrap.
+    #[inline(always)]
+    fn stored(z: i32) -> u32 {
+        (z >> (crate::numeric::Z_FRAC - FRAC)).clamp(0, Self::MAX as i32) as u32
+    }
+}
+
+impl<T: Cell, const FRAC: u32, const N: usize> DepthPlane for ZPlane<T, FRAC, N> {
     fn new() -> Self {
-        <Self as ColorPlane>::new()
+        ZPlane(<Plane<T, N> as ColorPlane>::new())
     }
     #[inline(always)]
     fn put(&mut self, i: usize, z: u16) {
-        self.0.as_flattened_mut()[i] = z;
+        self.0 .0.as_flattened_mut()[i] = T::from_u32((z as u32) << FRAC);
     }
     #[inline(always)]
     fn read(&self, i: usize) -> u16 {
-        self.0.as_flattened()[i]
+        (self.0 .0.as_flattened()[i].to_u32() >> FRAC) as u16
     }
     #[inline(always)]
-    fn test(&self, i: usize, z: u16) -> bool {
-        z < self.0.as_flattened()[i]
+    fn test(&self, i: usize, z: i32) -> bool {
+        Self::stored(z) < self.0 .0.as_flattened()[i].to_u32()
     }
     #[inline(always)]
-    fn test_and_set(&mut self, i: usize, z: u16) -> bool {
-        let cell = &mut self.0.as_flattened_mut()[i];
-        if z < *cell {
-            *cell = z;
+    fn test_and_set(&mut self, i: usize, z: i32) -> bool {
+        let z = Self::stored(z);
+        let cell = &mut self.0 .0.as_flattened_mut()[i];
+        if z < cell.to_u32() {
+            *cell = T::from_u32(z);
             true
         } else {
             false
@@ -117,11 +160,11 @@ impl DepthPlane for () {
         u16::MAX
     }
     #[inline(always)]
-    fn test_and_set(&mut self, _: usize, _: u16) -> bool {
+    fn test_and_set(&mut self, _: usize, _: i32) -> bool {
         true
     }
     #[inline(always)]
-    fn test(&self, _: usize, _: u16) -> bool {
+    fn test(&self, _: usize, _: i32) -> bool {
         true
     }
 }

@@ -11,7 +11,7 @@ use crate::format::{PixelFormat, Rgb};
 use crate::fragment::{DepthMode, WidMode};
 use crate::geom::Rect;
 use crate::list::DisplayList;
-use crate::numeric::MAX_SIDE;
+use crate::numeric::{Precision, MAX_SIDE};
 use crate::tile::Tile;
 use crate::wire::Encoded;
 use embedded_graphics_core::draw_target::DrawTarget;
@@ -156,11 +156,11 @@ impl Frame {
     /// Renders every tile and hands each finished tile to `done` (an
     /// overlay drawn with `embedded-graphics`, then a flush, a hash, a copy
     /// into a PNG...). Commands are validated once per frame.
-    pub fn render_with<const N: usize, F, Z, W, D, A, S, E>(
+    pub fn render_with<const N: usize, F, Z, W, D, A, P, S, E>(
         &self,
-        tile: &mut Tile<N, F, Z, W, D, A>,
+        tile: &mut Tile<N, F, Z, W, D, A, P>,
         cmds: &S,
-        mut done: impl FnMut(&mut Tile<N, F, Z, W, D, A>) -> Result<(), E>,
+        mut done: impl FnMut(&mut Tile<N, F, Z, W, D, A, P>) -> Result<(), E>,
     ) -> Result<FrameStats, FlushError<E>>
     where
         F: PixelFormat,
@@ -168,13 +168,14 @@ impl Frame {
         W: WidMode,
         D: Dither,
         A: AaMode,
+        P: Precision,
         S: CommandSource + ?Sized,
     {
         cmds.validate()?;
         let mut stats = FrameStats::default();
         for area in self.tiles() {
             tile.begin(area, &self.clear)?;
-            let mut replay = |tile: &mut Tile<N, F, Z, W, D, A>| {
+            let mut replay = |tile: &mut Tile<N, F, Z, W, D, A, P>| {
                 cmds.each(|cmd| {
                     let bounds = if A::SAMPLES > 0 {
                         cmd.coverage_bounds()
@@ -200,9 +201,9 @@ impl Frame {
     }
 
     /// Renders every tile and flushes it to `target`.
-    pub fn render<const N: usize, F, Z, W, D, A, S, T>(
+    pub fn render<const N: usize, F, Z, W, D, A, P, S, T>(
         &self,
-        tile: &mut Tile<N, F, Z, W, D, A>,
+        tile: &mut Tile<N, F, Z, W, D, A, P>,
         cmds: &S,
         target: &mut T,
     ) -> Result<FrameStats, FlushError<T::Error>>
@@ -212,6 +213,7 @@ impl Frame {
         W: WidMode,
         D: Dither,
         A: AaMode,
+        P: Precision,
         S: CommandSource + ?Sized,
         T: DrawTarget,
         T::Color: From<F::Color>,

@@ -101,11 +101,15 @@ pub mod prelude {
         BinaryFormat, Gray8Format, PixelFormat, Rgb, Rgb444, Rgb444Format, Rgb565Format,
         Rgb888Format,
     };
-    pub use crate::fragment::{Depth16, DepthMode, NoDepth, NoWid, Wid8, WidMode};
+    pub use crate::fragment::{
+        Depth16, Depth24, Depth32, DepthMode, NoDepth, NoWid, Wid8, WidMode,
+    };
     pub use crate::frame::{Clear, CommandSource, Frame, FrameStats};
     pub use crate::geom::Rect;
     pub use crate::line::{LineCmd, LineStyle};
     pub use crate::list::DisplayList;
-    pub use crate::numeric::{ColorFix, ColorStep, Coord, ZFix, ZStep};
+    pub use crate::numeric::{
+        Bits, ColorFix, ColorStep, Coord, FullPrecision, Precision, ZFix, ZStep,
+    };
     pub use crate::tile::Tile;
 }

@@ -18,12 +18,40 @@
 //!
 //! **Interpolation bound.** Each span restarts from the exact plane equation
 //! (barycentric weights from the integer edge functions, rounded to 2^-30), so
-//! the start value is within 2^-11 LSB of exact. Each DDA step adds a delta
-//! rounded to half a unit of the last fraction bit, so after `k` steps the
-//! drift is at most `k / 2` units: for the longest span (4096 pixels) that is
-//! 2^-5 LSB of colour (16 fraction bits) and 2^-3 LSB of Z (14 fraction bits).
-//! The final rounding to the stored integer adds 0.5 LSB. Hence the tested
-//! bounds: **colour within 1 LSB, Z within 1 LSB** of the f64 reference.
+//! the start value is within 2^-11 LSB of exact (2^-10 LSB of colour and
+//! 2^-9 LSB of Z, counting the weights' two roundings). Each DDA step adds a
+//! delta rounded to half a unit of the last fraction bit, so after `k` steps
+//! the drift is at most `k / 2` units: for the longest span (4096 pixels)
+//! that is 2^-5 LSB of colour (16 fraction bits) and 2^-3 LSB of Z (14
+//! fraction bits). The final rounding to the stored integer adds 0.5 LSB.
+//! Hence the **tested bounds** against the f64 reference:
+//!
+//! | quantity | bound (LSB) | tests |
+//! | --- | --- | --- |
+//! | colour (RGB888) | `0.5 + 2^-5 + 2^-10` | `accuracy`, `domain` (every triangle class, every span) |
+//! | Z (16-bit plane) | `0.5 + 2^-3 + 2^-9` | the same |
+//! | Bresenham line Z | `0.5 + 2^-10` | `lines` |
+//! | coverage | exactly the reference's pixel centres (same top-left rule) | `accuracy`, `domain`, `watertight` |
+//!
+//! measured at 0.4999 (colour) and 0.4990 (Z) on the 4096-pixel span.
+//!
+//! **Domain.** Vertices and line end points anywhere in
+//! `[-COORD_LIMIT, COORD_LIMIT)` (the guard band: 8192 px each way) are
+//! valid, and so is every span whose channels stay in range to its last
+//! pixel; anything else is an [`Error`](crate::Error), never garbage. Edge
+//! functions then stay below 2^40 and every product in setup below 2^62, so
+//! nothing wraps: the tests run with overflow checks on, over huge, tiny,
+//! sliver, near-collinear, collinear and coincident triangles
+//! (`tests/tests/domain.rs`).
+//!
+//! **Fewer bits.** A tile with [`Precision`] `Bits<C, Z>` rounds span starts
+//! and steps to `C` / `Z` fraction bits: the drift bound becomes `k`
+//! half-units of the coarser bit, `k / 2^(C+1)` LSB of colour after `k`
+//! pixels. `tilerast-sim tradeoff` measures what that costs in error
+//! (nothing is saved in cycles on a 32-bit core). Depth planes with
+//! fraction bits ([`Depth24`](crate::fragment::Depth24),
+//! [`Depth32`](crate::fragment::Depth32)) keep 8 or 14 of the DDA's 14
+//! fraction bits of Z instead of rounding to the integer.
 //!
 //! **Saturation.** Values are clamped to the channel range when quantized, so
 //! the dither "+1" and DDA drift never wrap.
@@ -61,6 +89,42 @@ pub const MAX_SIDE: u16 = 4096;
 pub const COLOR_FRAC: u32 = 16;
 /// Fraction bits of interpolated Z in the span DDA.
 pub const Z_FRAC: u32 = 14;
+/// How many fraction bits the colour and Z DDAs keep: a tile type parameter
+/// ([`Tile`](crate::tile::Tile)'s last), [`FullPrecision`] by default.
+///
+/// The DDA registers are 32 bits wide whatever this says; fewer bits round
+/// every span's start and step to nearest at `COLOR_BITS` (of at most
+/// [`COLOR_FRAC`]) and `Z_BITS` (of at most [`Z_FRAC`]) fraction bits, which
+/// is exactly the arithmetic of a narrower datapath. It exists to *measure*
+/// what each bit buys (`tilerast-sim tradeoff`), the way the seed's designers
+/// sized REjr's interpolators in their C model; the full widths cost nothing
+/// extra on a 32-bit core.
+///
+/// ```
+/// use tilerast::numeric::{Bits, FullPrecision, Precision};
+/// assert_eq!((FullPrecision::COLOR_BITS, FullPrecision::Z_BITS), (16, 14));
+/// assert_eq!(<Bits<8, 4> as Precision>::COLOR_BITS, 8);
+/// ```
+pub trait Precision: 'static {
+    /// Colour fraction bits kept, `0..=16`.
+    const COLOR_BITS: u32;
+    /// Z fraction bits kept, `0..=14`.
+    const Z_BITS: u32;
+}
+
+/// A [`Precision`] of `C` colour and `Z` depth fraction bits (values above
+/// the maximum mean the maximum).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Bits<const C: u32, const Z: u32>;
+
+impl<const C: u32, const Z: u32> Precision for Bits<C, Z> {
+    const COLOR_BITS: u32 = C;
+    const Z_BITS: u32 = Z;
+}
+
+/// Every fraction bit the DDAs have: 16 for colour, 14 for Z.
+pub type FullPrecision = Bits<COLOR_FRAC, Z_FRAC>;
+
 /// Fraction bits of barycentric weights at span start.
 pub(crate) const W_FRAC: u32 = 30;
 
@@ -86,15 +150,6 @@ pub(crate) fn div_floor(n: i64, d: i64) -> i64 {
 #[inline]
 pub(crate) fn div_round(n: i64, d: i64) -> i64 {
     div_floor(n + d / 2, d)
-}
-
-/// Converts a 16.14 interpolated Z to the stored 16-bit value (floor; the span
-/// start carries the +0.5 rounding bias).
-#[inline(always)]
-pub(crate) fn z_to_u16(z: i32) -> u16 {
-    // z <= 2^30 + 2^13 + drift, so z >> 14 <= 65536 only if drift exceeded its
-    // bound; clamp anyway: never wrap.
-    (z >> Z_FRAC).clamp(0, 0xFFFF) as u16
 }
 
 #[cfg(test)]

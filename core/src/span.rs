@@ -15,7 +15,7 @@ use crate::coverage::AaMode;
 use crate::dither::{quantize, round_bias, Dither};
 use crate::format::{ColorPlane, Lanes, PixelFormat};
 use crate::fragment::{DepthMode, DepthPlane, WidMode, WidPlane};
-use crate::numeric::{z_to_u16, Z_FRAC};
+use crate::numeric::{Precision, COLOR_FRAC, Z_FRAC};
 use crate::tile::Tile;
 
 /// Start values and per-pixel steps of one span, in the DDA formats: colour
@@ -45,10 +45,43 @@ impl<L: Lanes> SpanStart<L> {
             ..self
         }
     }
+
+    /// Start and steps rounded to nearest at the fraction bits `P` keeps
+    /// (the DDA of a narrower datapath; seed 001 tuned these widths). With
+    /// [`FullPrecision`](crate::numeric::FullPrecision) nothing is dropped
+    /// and this compiles to nothing. Called at the tile-independent restart
+    /// point, before [`Self::advanced`], so tiling cannot change the result.
+    #[inline(always)]
+    pub fn quantized<P: Precision>(self) -> Self {
+        let (cd, zd) = (
+            COLOR_FRAC.saturating_sub(P::COLOR_BITS),
+            Z_FRAC.saturating_sub(P::Z_BITS),
+        );
+        let q = |v: i32, drop: u32| {
+            if drop == 0 {
+                v
+            } else {
+                v.wrapping_add(1 << (drop - 1)) & !((1 << drop) - 1)
+            }
+        };
+        SpanStart {
+            c: self.c.map(|v| q(v, cd)),
+            dc: self.dc.map(|v| q(v, cd)),
+            z: q(self.z, zd),
+            dz: q(self.dz, zd),
+        }
+    }
 }
 
-impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither, A: AaMode>
-    Tile<N, F, Z, W, D, A>
+impl<
+        const N: usize,
+        F: PixelFormat,
+        Z: DepthMode,
+        W: WidMode,
+        D: Dither,
+        A: AaMode,
+        P: Precision,
+    > Tile<N, F, Z, W, D, A, P>
 {
     /// Draws `n >= 1` pixels from screen `(x, y)`, which the caller has
     /// clipped to this tile.
@@ -88,7 +121,7 @@ impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither, A: AaM
         let (mut c, mut z) = (s.c, s.z);
         let end = idx + n;
         loop {
-            if self.wid.pass(idx, wid) && self.depth.test_and_set(idx, z_to_u16(z)) {
+            if self.wid.pass(idx, wid) && self.depth.test_and_set(idx, z) {
                 let t = D::threshold(x, y);
                 let mut raw = F::pack(c.zip(F::MAX, |v, max| quantize::<D>(v, max, t)));
                 if MASKED {
@@ -133,7 +166,9 @@ impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither, A: AaM
         let zshift = 16 - Z_FRAC;
         let z = (at(s.z.to_bits() as i64, s.dz.to_bits() as i64) >> zshift) as i32;
         let dz = crate::numeric::div_round(s.dz.to_bits() as i64, 1 << zshift) as i32;
-        let start = SpanStart { c, dc, z, dz }.advanced(x0 - xr);
+        let start = SpanStart { c, dc, z, dz }
+            .quantized::<P>()
+            .advanced(x0 - xr);
         self.span(x0, s.y as i64, x1 - x0, start, st);
     }
 }

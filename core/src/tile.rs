@@ -15,7 +15,7 @@ use crate::format::{ColorPlane, Lanes, PixelFormat, Rgb};
 use crate::fragment::{DepthMode, DepthPlane, NoDepth, NoWid, WidMode, WidPlane};
 use crate::frame::Clear;
 use crate::geom::Rect;
-use crate::numeric::{z_to_u16, COLOR_FRAC, SUBPIXEL as SUBPIXEL_I64, Z_FRAC};
+use crate::numeric::{FullPrecision, Precision, COLOR_FRAC, SUBPIXEL as SUBPIXEL_I64, Z_FRAC};
 use crate::setup::TriangleSetup;
 use crate::span::SpanStart;
 use crate::traverse::for_each_span;
@@ -48,6 +48,7 @@ pub struct Tile<
     W: WidMode = NoWid,
     D: Dither = NoDither,
     A: AaMode = NoAa,
+    P: Precision = FullPrecision,
 > {
     pub(crate) color: F::Plane<N>,
     pub(crate) depth: Z::Plane<N>,
@@ -56,19 +57,33 @@ pub struct Tile<
     pub(crate) area: Rect,
     /// Coverage resolved into the colour plane ([`Tile::finish`]).
     resolved: bool,
-    _dither: PhantomData<D>,
+    _types: PhantomData<(D, P)>,
 }
 
-impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither, A: AaMode> Default
-    for Tile<N, F, Z, W, D, A>
+impl<
+        const N: usize,
+        F: PixelFormat,
+        Z: DepthMode,
+        W: WidMode,
+        D: Dither,
+        A: AaMode,
+        P: Precision,
+    > Default for Tile<N, F, Z, W, D, A, P>
 {
     fn default() -> Self {
         Self::new()
     }
 }
 
-impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither, A: AaMode>
-    Tile<N, F, Z, W, D, A>
+impl<
+        const N: usize,
+        F: PixelFormat,
+        Z: DepthMode,
+        W: WidMode,
+        D: Dither,
+        A: AaMode,
+        P: Precision,
+    > Tile<N, F, Z, W, D, A, P>
 {
     /// Pixel capacity: `8 N`.
     pub const CAPACITY: usize = 8 * N;
@@ -82,7 +97,7 @@ impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither, A: AaM
             aa: AaPlane::new(),
             area: Rect::default(),
             resolved: false,
-            _dither: PhantomData,
+            _types: PhantomData,
         }
     }
 
@@ -236,6 +251,7 @@ impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither, A: AaM
                 z,
                 dz: t.gz,
             }
+            .quantized::<P>()
             .advanced(x0 - xr);
             self.span(x0, py, x1 - x0, start, st);
         });
@@ -346,7 +362,7 @@ impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither, A: AaM
     fn blend(&mut self, x: i64, y: i64, c: F::Lanes, w: i32, z: i32, st: &State) {
         let a = self.area;
         let idx = ((y - a.y as i64) * a.w as i64 + (x - a.x as i64)) as usize;
-        if !self.wid.pass(idx, st.wid) || !self.depth.test(idx, z_to_u16(z + (1 << (Z_FRAC - 1)))) {
+        if !self.wid.pass(idx, st.wid) || !self.depth.test(idx, z + (1 << (Z_FRAC - 1))) {
             return;
         }
         let old = F::unpack(self.color.get(idx));
@@ -440,8 +456,15 @@ impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither, A: AaM
     }
 }
 
-impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither, A: AaMode> Dimensions
-    for Tile<N, F, Z, W, D, A>
+impl<
+        const N: usize,
+        F: PixelFormat,
+        Z: DepthMode,
+        W: WidMode,
+        D: Dither,
+        A: AaMode,
+        P: Precision,
+    > Dimensions for Tile<N, F, Z, W, D, A, P>
 {
     /// The tile's screen rectangle: `embedded-graphics` drawing is clipped to it.
     fn bounding_box(&self) -> Rectangle {
@@ -464,8 +487,15 @@ impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither, A: AaM
 /// assert_eq!(tile.pixel(9, 1), Some(Rgb565::RED));
 /// # Ok::<(), Error>(())
 /// ```
-impl<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither, A: AaMode> DrawTarget
-    for Tile<N, F, Z, W, D, A>
+impl<
+        const N: usize,
+        F: PixelFormat,
+        Z: DepthMode,
+        W: WidMode,
+        D: Dither,
+        A: AaMode,
+        P: Precision,
+    > DrawTarget for Tile<N, F, Z, W, D, A, P>
 {
     type Color = F::Color;
     type Error = core::convert::Infallible;

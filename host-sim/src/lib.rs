@@ -13,6 +13,7 @@ pub mod metrics;
 pub mod reference;
 pub mod render;
 pub mod ruf;
+pub mod tradeoff;
 /// The deterministic PRNG, shared with the firmware workloads.
 pub use tilerast_fw::rng;
 pub mod scene;

@@ -111,6 +111,34 @@ enum Cmd {
         #[arg(long, default_value = "reports/ruf_models.png")]
         renders: PathBuf,
     },
+    /// Sweep every knob (colour and Z fraction bits, depth bits, sub-pixel
+    /// bits, dither per format, antialiasing of solids, line mode) on a
+    /// fixed set of scenes and measure error and cost: Markdown, CSV and a
+    /// chart with each Pareto front. Takes about ten seconds (progress on
+    /// stderr); run it from a release build.
+    Tradeoff {
+        /// Folder of the seeds' OBJ models (teapot, dolphins).
+        #[arg(long, default_value = "../shared/models")]
+        models: PathBuf,
+        /// Leave the model scenes out (quick look).
+        #[arg(long)]
+        no_models: bool,
+        /// Timed renders per setting; the median is reported.
+        #[arg(long, default_value_t = 15, value_parser = clap::value_parser!(u64).range(1..=100))]
+        runs: u64,
+        /// Samples per pixel side of the ideal.
+        #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=64))]
+        samples: u32,
+        /// Markdown output.
+        #[arg(short, long, default_value = "reports/tradeoff.md")]
+        output: PathBuf,
+        /// CSV output.
+        #[arg(long, default_value = "reports/tradeoff.csv")]
+        csv: PathBuf,
+        /// Chart output.
+        #[arg(long, default_value = "reports/tradeoff.png")]
+        chart: PathBuf,
+    },
     /// Compare two PNGs: seed 000 eq. 8 colour error, PSNR, max abs error.
     Compare {
         /// Test image.
@@ -291,6 +319,35 @@ fn run(cli: Cli) -> Result<(), String> {
                 })
                 .collect();
             tilerast_sim::aa::montage(&rows, 1).save_png(&renders)?;
+            print!("{md}");
+        }
+        Cmd::Tradeoff {
+            models,
+            no_models,
+            runs,
+            samples,
+            output,
+            csv,
+            chart,
+        } => {
+            use tilerast_sim::tradeoff;
+            let opt = tradeoff::Options {
+                models: (!no_models).then_some(models),
+                runs: runs as usize,
+                ideal_samples: samples,
+                progress: true,
+            };
+            let points = tradeoff::run(&opt)?;
+            for p in [&output, &csv, &chart] {
+                if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
+                    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+                }
+            }
+            let md = tradeoff::report(&points, &opt, &chart, &csv);
+            std::fs::write(&output, &md).map_err(|e| format!("{}: {e}", output.display()))?;
+            std::fs::write(&csv, tradeoff::csv(&points))
+                .map_err(|e| format!("{}: {e}", csv.display()))?;
+            tradeoff::chart(&points).save_png(&chart)?;
             print!("{md}");
         }
         Cmd::Compare { a, b } => {

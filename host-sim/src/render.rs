@@ -157,6 +157,10 @@ pub struct Rendered {
     pub bits_per_pixel: u32,
     /// Binning and replay counts.
     pub stats: FrameStats,
+    /// Host time of the pipeline alone, in nanoseconds per screen pixel:
+    /// the median of the timed runs, when any were asked for
+    /// ([`render_timed`], [`render_as`]).
+    pub ns_per_pixel: Option<f64>,
 }
 
 use crate::image::Image;
@@ -170,41 +174,51 @@ impl Rendered {
 
 /// Renders `cmds` in tiles as the firmware would.
 pub fn render(cfg: &Config, cmds: &[Command]) -> Result<Rendered, Error> {
+    render_timed(cfg, cmds, 0)
+}
+
+/// [`render`], after timing `runs` renders ([`Rendered::ns_per_pixel`]).
+pub fn render_timed(cfg: &Config, cmds: &[Command], runs: usize) -> Result<Rendered, Error> {
     use tilerast::coverage::*;
     match cfg.aa {
-        AaKind::None => by_format::<NoAa, SIM_GROUPS>(cfg, cmds),
-        AaKind::Ruf4 => aa_format::<Ruf4>(cfg, cmds),
-        AaKind::Ruf8 => aa_format::<Ruf8>(cfg, cmds),
-        AaKind::Ruf16 => aa_format::<Ruf16>(cfg, cmds),
-        AaKind::Ss4 => aa_format::<Ss4>(cfg, cmds),
-        AaKind::Ss8 => aa_format::<Ss8>(cfg, cmds),
-        AaKind::Ss16 => aa_format::<Ss16>(cfg, cmds),
-        AaKind::Grid4 => aa_format::<SsGrid4>(cfg, cmds),
-        AaKind::Grid8 => aa_format::<SsGrid8>(cfg, cmds),
+        AaKind::None => by_format::<NoAa, SIM_GROUPS>(cfg, cmds, runs),
+        AaKind::Ruf4 => aa_format::<Ruf4>(cfg, cmds, runs),
+        AaKind::Ruf8 => aa_format::<Ruf8>(cfg, cmds, runs),
+        AaKind::Ruf16 => aa_format::<Ruf16>(cfg, cmds, runs),
+        AaKind::Ss4 => aa_format::<Ss4>(cfg, cmds, runs),
+        AaKind::Ss8 => aa_format::<Ss8>(cfg, cmds, runs),
+        AaKind::Ss16 => aa_format::<Ss16>(cfg, cmds, runs),
+        AaKind::Grid4 => aa_format::<SsGrid4>(cfg, cmds, runs),
+        AaKind::Grid8 => aa_format::<SsGrid8>(cfg, cmds, runs),
     }
 }
 
-fn by_format<A: AaMode, const G: usize>(cfg: &Config, cmds: &[Command]) -> Result<Rendered, Error> {
+fn by_format<A: AaMode, const G: usize>(
+    cfg: &Config,
+    cmds: &[Command],
+    runs: usize,
+) -> Result<Rendered, Error> {
     match cfg.format {
-        FormatKind::Rgb888 => by_depth::<Rgb888Format, A, G>(cfg, cmds),
-        FormatKind::Rgb565 => by_depth::<Rgb565Format, A, G>(cfg, cmds),
-        FormatKind::Rgb444 => by_depth::<Rgb444Format, A, G>(cfg, cmds),
-        FormatKind::Gray8 => by_depth::<Gray8Format, A, G>(cfg, cmds),
-        FormatKind::Binary => by_depth::<BinaryFormat, A, G>(cfg, cmds),
+        FormatKind::Rgb888 => by_depth::<Rgb888Format, A, G>(cfg, cmds, runs),
+        FormatKind::Rgb565 => by_depth::<Rgb565Format, A, G>(cfg, cmds, runs),
+        FormatKind::Rgb444 => by_depth::<Rgb444Format, A, G>(cfg, cmds, runs),
+        FormatKind::Gray8 => by_depth::<Gray8Format, A, G>(cfg, cmds, runs),
+        FormatKind::Binary => by_depth::<BinaryFormat, A, G>(cfg, cmds, runs),
     }
 }
 
 fn by_depth<F: PixelFormat, A: AaMode, const G: usize>(
     cfg: &Config,
     cmds: &[Command],
+    runs: usize,
 ) -> Result<Rendered, Error>
 where
     Rgb888: From<F::Color>,
 {
     if cfg.depth {
-        by_wid::<F, Depth16, A, G>(cfg, cmds)
+        by_wid::<F, Depth16, A, G>(cfg, cmds, runs)
     } else {
-        by_wid::<F, NoDepth, A, G>(cfg, cmds)
+        by_wid::<F, NoDepth, A, G>(cfg, cmds, runs)
     }
 }
 
@@ -213,80 +227,94 @@ where
 /// sample; the depth plane then holds each pixel's nearest sample for the
 /// lines drawn over the resolved image), and the dithers are the ones
 /// the scenes use (none, 4x4, 8x8).
-fn aa_format<A: AaMode>(cfg: &Config, cmds: &[Command]) -> Result<Rendered, Error> {
-    fn wid<F: PixelFormat, A: AaMode>(cfg: &Config, cmds: &[Command]) -> Result<Rendered, Error>
+fn aa_format<A: AaMode>(cfg: &Config, cmds: &[Command], runs: usize) -> Result<Rendered, Error> {
+    fn wid<F: PixelFormat, A: AaMode>(
+        cfg: &Config,
+        cmds: &[Command],
+        runs: usize,
+    ) -> Result<Rendered, Error>
     where
         Rgb888: From<F::Color>,
     {
         if cfg.wid {
-            dither::<F, Wid8, A>(cfg, cmds)
+            dither::<F, Wid8, A>(cfg, cmds, runs)
         } else {
-            dither::<F, NoWid, A>(cfg, cmds)
+            dither::<F, NoWid, A>(cfg, cmds, runs)
         }
     }
     fn dither<F: PixelFormat, W: WidMode, A: AaMode>(
         cfg: &Config,
         cmds: &[Command],
+        runs: usize,
     ) -> Result<Rendered, Error>
     where
         Rgb888: From<F::Color>,
     {
         match cfg.dither {
-            0 | 1 => run::<F, Depth16, W, NoDither, A, AA_GROUPS>(cfg, cmds),
-            4 => run::<F, Depth16, W, Bayer4, A, AA_GROUPS>(cfg, cmds),
-            8 => run::<F, Depth16, W, Bayer8, A, AA_GROUPS>(cfg, cmds),
+            0 | 1 => {
+                render_as::<F, Depth16, W, NoDither, A, FullPrecision, AA_GROUPS>(cfg, cmds, runs)
+            }
+            4 => render_as::<F, Depth16, W, Bayer4, A, FullPrecision, AA_GROUPS>(cfg, cmds, runs),
+            8 => render_as::<F, Depth16, W, Bayer8, A, FullPrecision, AA_GROUPS>(cfg, cmds, runs),
             _ => Err(Error::BadSize),
         }
     }
     match cfg.format {
-        FormatKind::Rgb888 => wid::<Rgb888Format, A>(cfg, cmds),
-        FormatKind::Rgb565 => wid::<Rgb565Format, A>(cfg, cmds),
-        FormatKind::Rgb444 => wid::<Rgb444Format, A>(cfg, cmds),
-        FormatKind::Gray8 => wid::<Gray8Format, A>(cfg, cmds),
-        FormatKind::Binary => wid::<BinaryFormat, A>(cfg, cmds),
+        FormatKind::Rgb888 => wid::<Rgb888Format, A>(cfg, cmds, runs),
+        FormatKind::Rgb565 => wid::<Rgb565Format, A>(cfg, cmds, runs),
+        FormatKind::Rgb444 => wid::<Rgb444Format, A>(cfg, cmds, runs),
+        FormatKind::Gray8 => wid::<Gray8Format, A>(cfg, cmds, runs),
+        FormatKind::Binary => wid::<BinaryFormat, A>(cfg, cmds, runs),
     }
 }
 
 fn by_wid<F: PixelFormat, Z: DepthMode, A: AaMode, const G: usize>(
     cfg: &Config,
     cmds: &[Command],
+    runs: usize,
 ) -> Result<Rendered, Error>
 where
     Rgb888: From<F::Color>,
 {
     if cfg.wid {
-        by_dither::<F, Z, Wid8, A, G>(cfg, cmds)
+        by_dither::<F, Z, Wid8, A, G>(cfg, cmds, runs)
     } else {
-        by_dither::<F, Z, NoWid, A, G>(cfg, cmds)
+        by_dither::<F, Z, NoWid, A, G>(cfg, cmds, runs)
     }
 }
 
 fn by_dither<F: PixelFormat, Z: DepthMode, W: WidMode, A: AaMode, const G: usize>(
     cfg: &Config,
     cmds: &[Command],
+    runs: usize,
 ) -> Result<Rendered, Error>
 where
     Rgb888: From<F::Color>,
 {
     match cfg.dither {
-        0 | 1 => run::<F, Z, W, NoDither, A, G>(cfg, cmds),
-        2 => run::<F, Z, W, Bayer2, A, G>(cfg, cmds),
-        4 => run::<F, Z, W, Bayer4, A, G>(cfg, cmds),
-        8 => run::<F, Z, W, Bayer8, A, G>(cfg, cmds),
-        16 => run::<F, Z, W, Bayer<4>, A, G>(cfg, cmds),
+        0 | 1 => render_as::<F, Z, W, NoDither, A, FullPrecision, G>(cfg, cmds, runs),
+        2 => render_as::<F, Z, W, Bayer2, A, FullPrecision, G>(cfg, cmds, runs),
+        4 => render_as::<F, Z, W, Bayer4, A, FullPrecision, G>(cfg, cmds, runs),
+        8 => render_as::<F, Z, W, Bayer8, A, FullPrecision, G>(cfg, cmds, runs),
+        16 => render_as::<F, Z, W, Bayer<4>, A, FullPrecision, G>(cfg, cmds, runs),
         _ => Err(Error::BadSize),
     }
 }
 
-fn run<F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither, A: AaMode, const G: usize>(
+/// The frame and a boxed tile of `G` groups for `cfg`, the tile shrunk
+/// until it fits (the output does not depend on the tiling).
+#[allow(clippy::type_complexity)]
+fn frame_and_tile<
+    F: PixelFormat,
+    Z: DepthMode,
+    W: WidMode,
+    D: Dither,
+    A: AaMode,
+    P: Precision,
+    const G: usize,
+>(
     cfg: &Config,
-    cmds: &[Command],
-) -> Result<Rendered, Error>
-where
-    Rgb888: From<F::Color>,
-{
-    // A coverage tile holds fewer pixels: shrink the tile if needed (the
-    // output does not depend on the tiling).
+) -> Result<(Frame, Box<Tile<G, F, Z, W, D, A, P>>), Error> {
     let (mut tw, mut th) = cfg.tile;
     while tw as usize * th as usize > G * 8 {
         if tw >= th {
@@ -297,8 +325,46 @@ where
     }
     let mut frame = Frame::new(cfg.width, cfg.height, tw, th)?;
     frame.clear = cfg.clear;
-    let mut tile: Box<Tile<G, F, Z, W, D, A>> = Box::default();
+    Ok((frame, Box::default()))
+}
+
+/// Renders `cmds` with the tile types given, whatever `cfg` says about
+/// format, planes, dither and coverage (its screen, tile size and clear
+/// values are used): the entry point for sweeps over knobs that are types.
+/// With `runs > 0` it first times that many renders, tiles discarded when
+/// done (no copy, no flush) so that only the pipeline is timed, and
+/// reports the median.
+pub fn render_as<
+    F: PixelFormat,
+    Z: DepthMode,
+    W: WidMode,
+    D: Dither,
+    A: AaMode,
+    P: Precision,
+    const G: usize,
+>(
+    cfg: &Config,
+    cmds: &[Command],
+    runs: usize,
+) -> Result<Rendered, Error>
+where
+    Rgb888: From<F::Color>,
+{
+    let (frame, mut tile) = frame_and_tile::<F, Z, W, D, A, P, G>(cfg)?;
     let (w, h) = (cfg.width as u32, cfg.height as u32);
+    let mut times: Vec<f64> = (0..runs)
+        .map(|_| {
+            let start = std::time::Instant::now();
+            frame
+                .render_with(&mut tile, cmds, |t| {
+                    std::hint::black_box(t.raw(t.area().x, t.area().y));
+                    Ok::<(), core::convert::Infallible>(())
+                })
+                .map_err(raster_error)?;
+            Ok(start.elapsed().as_nanos() as f64 / (w as f64 * h as f64))
+        })
+        .collect::<Result<_, Error>>()?;
+    times.sort_by(f64::total_cmp);
     let mut image = Image::new(w, h);
     let mut raw = vec![0u32; (w * h) as usize];
     let mut depth = vec![u16::MAX; (w * h) as usize];
@@ -317,17 +383,22 @@ where
             }
             Ok::<(), core::convert::Infallible>(())
         })
-        .map_err(|e| match e {
-            FlushError::Raster(e) => e,
-            FlushError::Target(never) => match never {},
-        })?;
+        .map_err(raster_error)?;
     Ok(Rendered {
         image,
         raw,
         depth,
-        bits_per_pixel: Tile::<G, F, Z, W, D, A>::bits_per_pixel(),
+        bits_per_pixel: Tile::<G, F, Z, W, D, A, P>::bits_per_pixel(),
         stats,
+        ns_per_pixel: times.get(times.len() / 2).copied(),
     })
+}
+
+fn raster_error(e: FlushError<core::convert::Infallible>) -> Error {
+    match e {
+        FlushError::Raster(e) => e,
+        FlushError::Target(never) => match never {},
+    }
 }
 
 use embedded_graphics_core::pixelcolor::RgbColor;

@@ -71,15 +71,38 @@ impl Traffic {
     }
 }
 
-/// Sizes of the access patterns, with the paper's C = 4 B, Z = 4 B, tag
-/// 2 B and an 8-bit mask.
-const C: u64 = 4;
-const Z: u64 = 4;
-const TAG: u64 = 2;
-const MASK: u64 = 1;
+/// Bytes of each field an access touches.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Sizes {
+    /// A colour (per sample, frame-buffer pixel or RUF entry).
+    pub c: u64,
+    /// A depth (per sample); 0 without a depth plane.
+    pub z: u64,
+    /// An object tag.
+    pub tag: u64,
+    /// A coverage mask.
+    pub mask: u64,
+}
+
+/// The paper's sizes: C = 4 B, Z = 4 B, tag 2 B and an 8-bit mask.
+pub const PAPER: Sizes = Sizes {
+    c: 4,
+    z: 4,
+    tag: 2,
+    mask: 1,
+};
 
 /// Replays the scene's triangles as 8-sample fragments through both pixel
-/// kinds and counts memory traffic per access pattern:
+/// kinds and counts memory traffic per access pattern, with the paper's
+/// sizes ([`traffic_with`]).
+pub fn traffic(scene: &Scene) -> (Traffic, Traffic) {
+    let (w, h) = (scene.config.width, scene.config.height);
+    traffic_with::<Sparse8, 8>(&scene.commands, w, h, PAPER, true)
+}
+
+/// Replays the triangles of `cmds` as fragments of pattern `P` (`M`
+/// samples) on a `w x h` screen through a supersampling pixel and a RUF
+/// pixel and counts the bytes each access pattern touches:
 /// - clear, per pixel: supersampling writes C and Z of every sample; RUF
 ///   writes Z of every sample, the frame-buffer colour and mask and the
 ///   RUF entry (tag, mask, colour);
@@ -89,38 +112,50 @@ const MASK: u64 = 1;
 ///   each survivor;
 /// - resolve, per pixel: supersampling reads C of every sample; RUF reads
 ///   the frame-buffer colour and mask.
-pub fn traffic(scene: &Scene) -> (Traffic, Traffic) {
-    let (w, h) = (scene.config.width as usize, scene.config.height as usize);
+///
+/// With [`Centre1`] the supersampling count is the aliased pipeline's:
+/// clear, Z read per fragment, colour and Z written per survivor, colour
+/// read by the flush. Without `depth_test` every covered sample survives.
+pub fn traffic_with<P: SamplePattern, const M: usize>(
+    cmds: &[Command],
+    w: u16,
+    h: u16,
+    sz: Sizes,
+    depth_test: bool,
+) -> (Traffic, Traffic) {
+    let (w, h) = (w as usize, h as usize);
     let screen = Rect::new(0, 0, w as u32, h as u32);
-    let mut ss = vec![SsPixel::<8>::new(Rgb::new(0, 0, 0), u16::MAX); w * h];
-    let mut ruf = vec![RufPixel::<8, u8>::new(u16::MAX); w * h];
+    let mut ss = vec![SsPixel::<M>::new(Rgb::new(0, 0, 0), u16::MAX); w * h];
+    let mut ruf = vec![RufPixel::<M>::new(u16::MAX); w * h];
     let (mut ts, mut tr) = (Traffic::default(), Traffic::default());
-    let (px, m) = ((w * h) as u64, 8u64);
-    let ruf_pixel = C + MASK + TAG + MASK + C;
-    ts.written += px * m * (C + Z);
-    tr.written += px * (m * Z + ruf_pixel);
-    ts.read += px * m * C;
-    tr.read += px * (C + MASK);
-    ts.per_pixel = px * m * (C + Z) + px * m * C;
-    tr.per_pixel = px * (m * Z + ruf_pixel) + px * (C + MASK);
-    for cmd in &scene.commands {
+    let (px, m) = ((w * h) as u64, M as u64);
+    let Sizes { c, z, tag, mask } = sz;
+    let ruf_pixel = c + mask + tag + mask + c;
+    ts.written += px * m * (c + z);
+    tr.written += px * (m * z + ruf_pixel);
+    ts.read += px * m * c;
+    tr.read += px * (c + mask);
+    ts.per_pixel = px * m * (c + z) + px * m * c;
+    tr.per_pixel = px * (m * z + ruf_pixel) + px * (c + mask);
+    for cmd in cmds {
         let Command::Triangle { v, state } = cmd else {
             continue;
         };
-        fragments::<Sparse8>(v, &screen, |px, py, m, c, z| {
+        fragments::<P>(v, &screen, |px, py, msk, col, d| {
             let i = py as usize * w + px as usize;
-            let n = count(m) as u64;
+            let n = count(msk) as u64;
             for t in [&mut ts, &mut tr] {
                 t.fragments += 1;
                 t.samples += n;
-                t.read += n * Z;
+                t.read += n * z;
             }
-            let sur = count(ss[i].update_with(m, |k| z.at(k), true, c)) as u64;
-            ts.written += sur * (C + Z);
-            let sur = count(ruf[i].update_with(m, |k| z.at(k), true, c, state.tag)) as u64;
+            let sur = count(ss[i].update_with(msk, |k| d.at(k), depth_test, col)) as u64;
+            ts.written += sur * (c + z);
+            let sur =
+                count(ruf[i].update_with(msk, |k| d.at(k), depth_test, col, state.tag)) as u64;
             if sur > 0 {
                 tr.read += ruf_pixel;
-                tr.written += sur * Z + ruf_pixel;
+                tr.written += sur * z + ruf_pixel;
             }
         });
     }

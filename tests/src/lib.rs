@@ -76,6 +76,57 @@ pub fn tri(v: [Vertex; 3], wid: u8) -> Command {
     }
 }
 
+/// The numeric contract's colour bound, LSB ([`tilerast::numeric`]).
+pub const COLOR_BOUND: f64 = 0.5 + 1.0 / 32.0 + 1.0 / 1024.0;
+/// The numeric contract's Z bound, LSB.
+pub const Z_BOUND: f64 = 0.5 + 1.0 / 8.0 + 1.0 / 512.0;
+
+/// Renders one triangle with the core (RGB888, 16-bit Z, tiles of `tile`)
+/// and with the f64 reference, and checks that they cover the same pixel
+/// centres and that every covered pixel's colour and Z are within the
+/// bounds; returns the largest errors.
+pub fn check_triangle(
+    w: u16,
+    h: u16,
+    tile: (u16, u16),
+    v: [Vertex; 3],
+) -> Result<(f64, f64), proptest::test_runner::TestCaseError> {
+    use proptest::{prop_assert, prop_assert_eq};
+    let mut c = config(w, h, FormatKind::Rgb888);
+    c.depth = true;
+    c.tile = tile;
+    let cmds = [tri(v, 0)];
+    let ours = tilerast_sim::render(&c, &cmds).unwrap();
+    let exact = tilerast_sim::reference::render(&c, &cmds);
+    let (mut max_c, mut max_z) = (0.0f64, 0.0f64);
+    for i in 0..ours.raw.len() {
+        let covered = exact.depth[i] < 65535.0;
+        prop_assert_eq!(
+            ours.depth[i] < 65535,
+            covered,
+            "coverage differs at pixel {}",
+            i
+        );
+        if !covered {
+            continue;
+        }
+        let p = ours.raw[i];
+        let got = [(p >> 16) & 255, (p >> 8) & 255, p & 255];
+        for (g, e) in got.iter().zip(exact.color[i]) {
+            max_c = max_c.max((*g as f64 - e).abs());
+        }
+        max_z = max_z.max((ours.depth[i] as f64 - exact.depth[i]).abs());
+    }
+    prop_assert!(
+        max_c <= COLOR_BOUND,
+        "colour error {} > {}",
+        max_c,
+        COLOR_BOUND
+    );
+    prop_assert!(max_z <= Z_BOUND, "Z error {} > {}", max_z, Z_BOUND);
+    Ok((max_c, max_z))
+}
+
 /// A random command for a screen of about 100x80 pixels, drawing into window
 /// `wid`, sometimes with a partial plane mask: fills, Z fills, ramps (span
 /// commands whose colour and depth stay in range), styled lines,

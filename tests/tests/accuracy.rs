@@ -4,48 +4,7 @@
 
 use proptest::prelude::*;
 use tilerast::prelude::*;
-use tilerast_sim::{reference, render, FormatKind};
-use tilerast_tests::{config, tri, vsub};
-
-const COLOR_BOUND: f64 = 0.5 + 1.0 / 32.0 + 1.0 / 1024.0;
-const Z_BOUND: f64 = 0.5 + 1.0 / 8.0 + 1.0 / 512.0;
-
-/// Renders one triangle both ways and checks coverage and every covered pixel.
-fn check(w: u16, h: u16, tile: (u16, u16), v: [Vertex; 3]) -> Result<(f64, f64), TestCaseError> {
-    let mut c = config(w, h, FormatKind::Rgb888);
-    c.depth = true;
-    c.tile = tile;
-    let cmds = [tri(v, 0)];
-    let ours = render(&c, &cmds).unwrap();
-    let exact = reference::render(&c, &cmds);
-    let (mut max_c, mut max_z) = (0.0f64, 0.0f64);
-    for i in 0..ours.raw.len() {
-        let covered = exact.depth[i] < 65535.0;
-        prop_assert_eq!(
-            ours.depth[i] < 65535,
-            covered,
-            "coverage differs at pixel {}",
-            i
-        );
-        if !covered {
-            continue;
-        }
-        let p = ours.raw[i];
-        let got = [(p >> 16) & 255, (p >> 8) & 255, p & 255];
-        for (g, e) in got.iter().zip(exact.color[i]) {
-            max_c = max_c.max((*g as f64 - e).abs());
-        }
-        max_z = max_z.max((ours.depth[i] as f64 - exact.depth[i]).abs());
-    }
-    prop_assert!(
-        max_c <= COLOR_BOUND,
-        "colour error {} > {}",
-        max_c,
-        COLOR_BOUND
-    );
-    prop_assert!(max_z <= Z_BOUND, "Z error {} > {}", max_z, Z_BOUND);
-    Ok((max_c, max_z))
-}
+use tilerast_tests::{check_triangle as check, vsub};
 
 fn vertex() -> impl Strategy<Value = Vertex> {
     // Screen is 96x64 = 1536x1024 sub-pixels; vertices reach 4 screens out.

@@ -9,7 +9,9 @@
 //!   builds the real-board example, and builds and runs both QEMU firmwares,
 //!   checking that their output is bit-identical to the host's.
 //! - `demo`: renders `scenes/demo.toml` to `demo.png`.
-//! - `bench`: runs the criterion benchmark, writes `reports/bench.md`.
+//! - `bench`: runs the criterion benchmark, writes `reports/bench.md`, then
+//!   the simulator's quality reports (`aa`, `ruf`) and the speed-against-
+//!   accuracy sweep (`reports/tradeoff.*`).
 //! - `report`: runs the firmware under QEMU, writes `reports/targets.md`
 //!   (instructions per pixel on Cortex-M0/M4, flash, RAM, stack).
 
@@ -300,7 +302,9 @@ fn bench() -> Result<(), String> {
         "--image",
         "reports/aa.png",
     ])?;
-    sim(&["ruf-report"])
+    sim(&["ruf-report"])?;
+    // Every knob on both axes (`reports/tradeoff.{md,csv,png}`).
+    sim(&["tradeoff"])
 }
 
 /// Runs the firmware under QEMU and writes `reports/targets.md`.
