@@ -114,7 +114,7 @@ enum Cmd {
     /// Sweep every knob (colour and Z fraction bits, depth bits, sub-pixel
     /// bits, dither per format, antialiasing of solids, line mode) on a
     /// fixed set of scenes and measure error and cost: Markdown, CSV and a
-    /// chart with each Pareto front. Takes about ten seconds (progress on
+    /// chart with each Pareto front. Takes a few seconds (progress on
     /// stderr); run it from a release build.
     Tradeoff {
         /// Folder of the seeds' OBJ models (teapot, dolphins).

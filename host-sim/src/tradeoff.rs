@@ -554,7 +554,7 @@ fn aliased_traffic(cmds: &[Command], cfg: &Config, format: FormatKind, zbytes: u
 }
 
 fn coverage_traffic(s: &Subject, k: AaKind) -> u64 {
-    let (w, h, c) = (&s.cmds, s.cfg.width, s.cfg.height);
+    let (cmds, w, h) = (&s.cmds, s.cfg.width, s.cfg.height);
     let sz = |m: u64| Sizes {
         c: 3,
         z: 2,
@@ -562,12 +562,12 @@ fn coverage_traffic(s: &Subject, k: AaKind) -> u64 {
         mask: m.div_ceil(8),
     };
     let (ss, ruf) = match k {
-        AaKind::Ruf4 | AaKind::Ss4 => traffic_with::<Sparse4, 4>(w, h, c, sz(4), true),
-        AaKind::Ruf8 | AaKind::Ss8 => traffic_with::<Sparse8, 8>(w, h, c, sz(8), true),
-        AaKind::Ruf16 | AaKind::Ss16 => traffic_with::<Sparse16, 16>(w, h, c, sz(16), true),
-        AaKind::Grid4 => traffic_with::<Grid4x4, 16>(w, h, c, sz(16), true),
-        AaKind::Grid8 => traffic_with::<Grid8x8, 64>(w, h, c, sz(64), true),
-        AaKind::None => traffic_with::<Centre1, 1>(w, h, c, sz(1), true),
+        AaKind::Ruf4 | AaKind::Ss4 => traffic_with::<Sparse4, 4>(cmds, w, h, sz(4), true),
+        AaKind::Ruf8 | AaKind::Ss8 => traffic_with::<Sparse8, 8>(cmds, w, h, sz(8), true),
+        AaKind::Ruf16 | AaKind::Ss16 => traffic_with::<Sparse16, 16>(cmds, w, h, sz(16), true),
+        AaKind::Grid4 => traffic_with::<Grid4x4, 16>(cmds, w, h, sz(16), true),
+        AaKind::Grid8 => traffic_with::<Grid8x8, 64>(cmds, w, h, sz(64), true),
+        AaKind::None => traffic_with::<Centre1, 1>(cmds, w, h, sz(1), true),
     };
     match k {
         AaKind::Ruf4 | AaKind::Ruf8 | AaKind::Ruf16 => ruf.total(),

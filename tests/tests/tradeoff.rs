@@ -84,19 +84,8 @@ fn reduced_precision_is_tile_independent() {
     let mut rng = Rng::new(0x7ade_0ff5);
     let cmds: Vec<Command> = (0..60).map(|_| random_command(&mut rng, 0)).collect();
     let mut cfg = config(100, 80, FormatKind::Rgb565);
-    let whole = render_as::<
-        Rgb565Format,
-        Depth32,
-        NoWid,
-        Bayer4,
-        tilerast::coverage::NoAa,
-        Bits<5, 3>,
-        SIM_GROUPS,
-    >(&cfg, &cmds, 0)
-    .unwrap();
-    for tile in [(7, 5), (33, 17), (64, 1)] {
-        cfg.tile = tile;
-        let t = render_as::<
+    let draw = |cfg: &tilerast_sim::Config| {
+        render_as::<
             Rgb565Format,
             Depth32,
             NoWid,
@@ -104,8 +93,13 @@ fn reduced_precision_is_tile_independent() {
             tilerast::coverage::NoAa,
             Bits<5, 3>,
             SIM_GROUPS,
-        >(&cfg, &cmds, 0)
-        .unwrap();
+        >(cfg, &cmds, 0)
+        .unwrap()
+    };
+    let whole = draw(&cfg);
+    for tile in [(7, 5), (33, 17), (64, 1)] {
+        cfg.tile = tile;
+        let t = draw(&cfg);
         assert_eq!(t.raw, whole.raw, "tile {tile:?}");
         assert_eq!(t.depth, whole.depth, "tile {tile:?}");
     }
