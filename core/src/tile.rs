@@ -127,12 +127,29 @@ impl<
     }
 
     /// Starts a tile at screen rectangle `area` and clears its planes.
+    ///
+    /// The rectangle must lie inside the guard band
+    /// `[-COORD_LIMIT, COORD_LIMIT]` on both axes (the numeric contract's
+    /// domain; [`Error::CoordOutOfRange`] otherwise), so every pixel
+    /// address of the tile fits an `i32` with room to spare.
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// let mut tile: Tile<8, Rgb565Format> = Tile::new();
+    /// assert_eq!(tile.begin(Rect::new(i32::MAX - 3, 0, 4, 1), &Clear::default()),
+    ///            Err(Error::CoordOutOfRange));
+    /// ```
     pub fn begin(&mut self, area: Rect, clear: &Clear) -> Result<(), Error> {
         if area.w == 0 || area.h == 0 {
             return Err(Error::BadSize);
         }
         if area.area() > Self::CAPACITY as u64 {
             return Err(Error::TileTooLarge);
+        }
+        let lim = crate::numeric::COORD_LIMIT as i64;
+        let inside = |lo: i32, hi: i64| lo as i64 >= -lim && hi <= lim;
+        if !inside(area.x, area.x1()) || !inside(area.y, area.y1()) {
+            return Err(Error::CoordOutOfRange);
         }
         self.area = area;
         self.resolved = false;
@@ -186,9 +203,24 @@ impl<
     }
 
     /// Draws a command already validated.
+    ///
+    /// With coverage antialiasing a frame draws its commands twice
+    /// ([`Tile::finish`] between): solids merge into the coverage plane in
+    /// the first pass; spans, lines and every command with a partial plane
+    /// mask are drawn over the resolved pixels in the second, so the mask
+    /// keeps the bits it protects (coverage samples hold whole colours,
+    /// not planes).
     pub(crate) fn draw_valid(&mut self, cmd: &Command) {
         if A::SAMPLES > 0 {
+            let masked = match cmd {
+                Command::Triangle { state, .. } | Command::Fill { state, .. } => {
+                    state.plane_mask & F::MASK_ALL != F::MASK_ALL
+                }
+                _ => false,
+            };
             match (self.resolved, cmd) {
+                (false, Command::Triangle { .. } | Command::Fill { .. }) if masked => return,
+                (true, Command::Triangle { .. } | Command::Fill { .. }) if masked => {}
                 (false, Command::Triangle { v, state }) => return self.triangle_aa(v, state),
                 (false, Command::Fill { rect, color, state }) => {
                     // The colour plane keeps the background of the samples
@@ -403,8 +435,9 @@ impl<
             return;
         };
         let a = self.area;
-        for y in r.y..r.y1() as i32 {
-            let row = ((y - a.y) as u32 * a.w + (r.x - a.x) as u32) as usize;
+        for y in 0..r.h {
+            let row = ((r.y - a.y) as u32 + y) * a.w + (r.x - a.x) as u32;
+            let row = row as usize;
             for i in row..row + r.w as usize {
                 f(self, i);
             }

@@ -10,6 +10,7 @@ pub mod aa;
 pub mod image;
 pub mod mesh;
 pub mod metrics;
+pub mod obj;
 pub mod reference;
 pub mod render;
 pub mod ruf;
@@ -19,5 +20,6 @@ pub use tilerast_fw::rng;
 pub mod scene;
 
 pub use image::Image;
+pub use obj::Limits;
 pub use render::{render, AaKind, Config, FormatKind, Rendered};
 pub use scene::Scene;

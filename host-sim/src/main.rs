@@ -99,7 +99,7 @@ enum Cmd {
     /// Markdown tables, a chart of Table 2 and the renders side by side.
     RufReport {
         /// Folder of OBJ models (every `.obj` in it, by name).
-        #[arg(long, default_value = "../shared/models")]
+        #[arg(long, default_value = "assets/models")]
         models: PathBuf,
         /// Markdown output.
         #[arg(short, long, default_value = "reports/ruf.md")]
@@ -118,7 +118,7 @@ enum Cmd {
     /// stderr); run it from a release build.
     Tradeoff {
         /// Folder of the seeds' OBJ models (teapot, dolphins).
-        #[arg(long, default_value = "../shared/models")]
+        #[arg(long, default_value = "assets/models")]
         models: PathBuf,
         /// Leave the model scenes out (quick look).
         #[arg(long)]

@@ -115,6 +115,10 @@ pub struct MeshStats {
     pub edges: usize,
     /// Triangles culled as back faces.
     pub culled: usize,
+    /// The OBJ's line elements (`l`), drawn as lines.
+    pub obj_lines: usize,
+    /// What the OBJ reader skipped or could not find, each naming its line.
+    pub warnings: Vec<String>,
 }
 
 /// The edges of a triangle set that border something else on screen: those
@@ -193,25 +197,22 @@ pub fn load(
     out: &mut Vec<Command>,
     edges: &mut Vec<Command>,
     tags: &mut u16,
+    limits: &crate::obj::Limits,
 ) -> Result<MeshStats, String> {
     let path = base.join(&spec.obj);
-    let opts = tobj::LoadOptions {
-        triangulate: true,
-        single_index: true,
-        ..Default::default()
-    };
-    let (models, mats) =
-        tobj::load_obj(&path, &opts).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mats = mats.unwrap_or_default();
+    let obj = crate::obj::load(&path, limits)?;
+    let models = &obj.models;
+    let mats = &obj.materials;
     let mut stats = MeshStats {
         groups: models.len(),
+        warnings: obj.warnings.clone(),
         ..Default::default()
     };
 
-    // Unit cube fit (like GLM's glmUnitize).
+    // Unit cube fit (like GLM's glmUnitize), over the finite vertices.
     let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
-    for m in &models {
-        for p in m.mesh.positions.chunks_exact(3) {
+    for m in models {
+        for (p, _) in m.positions.iter().zip(&m.finite).filter(|f| *f.1) {
             for k in 0..3 {
                 lo[k] = lo[k].min(p[k] as f64);
                 hi[k] = hi[k].max(p[k] as f64);
@@ -244,23 +245,22 @@ pub fn load(
     let light = norm(spec.light);
 
     let mut solids = Vec::new();
-    for m in &models {
-        let mesh = &m.mesh;
+    for mesh in models {
         let pos: Vec<V3> = mesh
             .positions
-            .chunks_exact(3)
+            .iter()
             .map(|p| rotate(std::array::from_fn(|k| (p[k] as f64 - center[k]) * scale)))
             .collect();
         stats.vertices += pos.len();
-        let normals: Vec<V3> = if mesh.normals.len() == mesh.positions.len() {
+        let normals: Vec<V3> = if !mesh.normals.is_empty() {
             mesh.normals
-                .chunks_exact(3)
+                .iter()
                 .map(|n| norm(rotate([n[0] as f64, n[1] as f64, n[2] as f64])))
                 .collect()
         } else {
             let mut acc = vec![[0.0; 3]; pos.len()];
-            for t in mesh.indices.chunks_exact(3) {
-                let [a, b, c] = [t[0], t[1], t[2]].map(|i| pos[i as usize]);
+            for t in &mesh.triangles {
+                let [a, b, c] = t.map(|i| pos[i as usize]);
                 let n = cross(sub(b, a), sub(c, a)); // area-weighted
                 for &i in t {
                     acc[i as usize] = std::array::from_fn(|k| acc[i as usize][k] + n[k]);
@@ -270,7 +270,7 @@ pub fn load(
         };
         let kd = match (
             spec.color,
-            mesh.material_id
+            mesh.material
                 .and_then(|i| mats.get(i))
                 .and_then(|m| m.diffuse),
         ) {
@@ -312,9 +312,9 @@ pub fn load(
             ..State::default()
         };
         let mut wire = std::collections::BTreeSet::new();
-        for t in mesh.indices.chunks_exact(3) {
+        for t in &mesh.triangles {
             stats.triangles += 1;
-            match [t[0], t[1], t[2]].map(|i| verts[i as usize]) {
+            match t.map(|i| verts[i as usize]) {
                 [Some(a), Some(b), Some(c)] => {
                     let area = |a: Vertex, b: Vertex, c: Vertex| {
                         let p = |v: Vertex| (v.x.to_bits() as i64, v.y.to_bits() as i64);
@@ -339,6 +339,26 @@ pub fn load(
                     }
                 }
                 _ => stats.dropped += 1,
+            }
+        }
+        // The OBJ's own line elements, in the group's unlit colour.
+        for l in &mesh.lines {
+            let (Some(a), Some(b)) = (verts[l[0] as usize], verts[l[1] as usize]) else {
+                stats.dropped += 1;
+                continue;
+            };
+            let c = kd.map(|k| (k * 255.0).round().clamp(0.0, 255.0) as u8);
+            let line = LineCmd {
+                p0: (a.x, a.y),
+                p1: (b.x, b.y),
+                z: [a.z, b.z],
+                color: Rgb::new(c[0], c[1], c[2]),
+                style: LineStyle::SOLID,
+                antialias: spec.wire_aa,
+            };
+            if line.validate().is_ok() {
+                out.push(Command::Line { line, state });
+                stats.obj_lines += 1;
             }
         }
         if let Some(rgb) = spec.wireframe {

@@ -390,49 +390,61 @@ fn triangle(f: &mut RefFrame, cfg: &Config, v: &[Vertex; 3], wid: u8) {
 /// none); fills and spans cover whole pixels. This is the "16x16
 /// supersampled reference" that approximate modes are measured against.
 ///
-/// Rendered in bands of 8 rows, so a 16x16 reference of a 240x160 screen
-/// needs about 8 MB.
+/// Rendered in blocks of at most [`SAMPLE_BUDGET`] samples (8 rows of
+/// the screen, fewer rows or a part of a row when `n` or the width is
+/// large), so memory is 33 bytes per screen pixel for the result plus at
+/// most 33 bytes per budgeted sample (about 69 MB) whatever `n`: a
+/// 4096x8 screen at 64x64 samples needs no more than a 240x160 one.
 pub fn supersample(cfg: &Config, cmds: &[Command], n: u32) -> RefFrame {
     let (w, h) = (cfg.width as u32, cfg.height as u32);
     let mut out = render(cfg, &[]);
     let n = n.max(1);
     let nn = (n * n) as f64;
-    const BAND: u32 = 8;
-    for y0 in (0..h).step_by(BAND as usize) {
-        let bh = BAND.min(h - y0);
-        let mut s = Samples {
-            n,
-            y0,
-            sw: w * n,
-            sh: bh * n,
-            color: vec![rgb(cfg.clear.color); (w * n * bh * n) as usize],
-            depth: vec![
-                if cfg.depth {
-                    cfg.clear.depth as f64
-                } else {
-                    f64::INFINITY
-                };
-                (w * n * bh * n) as usize
-            ],
-            wid: vec![cfg.clear.wid; (w * n * bh * n) as usize],
-        };
-        // Every command clips itself to the band's samples (the pipeline's
-        // bounds are pixel-centre bounds; the ideal reaches past them).
-        for cmd in cmds {
-            s.draw(cfg, cmd);
-        }
-        for py in 0..bh {
-            for px in 0..w {
-                let mut acc = [0.0; 3];
-                for j in 0..n {
-                    for i in 0..n {
-                        let c = s.color[((py * n + j) * s.sw + px * n + i) as usize];
-                        (0..3).for_each(|ch| acc[ch] += c[ch]);
+    let per_px = (n as u64 * n as u64).max(1);
+    // Whole rows (up to 8) when they fit the budget, else part of one row.
+    let rows = (SAMPLE_BUDGET / (per_px * w as u64)).clamp(1, 8) as u32;
+    let cols = (SAMPLE_BUDGET / per_px).clamp(1, w as u64) as u32;
+    for y0 in (0..h).step_by(rows as usize) {
+        let bh = rows.min(h - y0);
+        for x0 in (0..w).step_by(cols as usize) {
+            let bw = cols.min(w - x0);
+            let len = (bw * n * bh * n) as usize;
+            let mut s = Samples {
+                n,
+                x0,
+                y0,
+                sw: bw * n,
+                sh: bh * n,
+                color: vec![rgb(cfg.clear.color); len],
+                depth: vec![
+                    if cfg.depth {
+                        cfg.clear.depth as f64
+                    } else {
+                        f64::INFINITY
+                    };
+                    len
+                ],
+                wid: vec![cfg.clear.wid; len],
+            };
+            // Every command clips itself to the block's samples (the
+            // pipeline's bounds are pixel-centre bounds; the ideal reaches
+            // past them).
+            for cmd in cmds {
+                s.draw(cfg, cmd);
+            }
+            for py in 0..bh {
+                for px in 0..bw {
+                    let mut acc = [0.0; 3];
+                    for j in 0..n {
+                        for i in 0..n {
+                            let c = s.color[((py * n + j) * s.sw + px * n + i) as usize];
+                            (0..3).for_each(|ch| acc[ch] += c[ch]);
+                        }
                     }
+                    let o = ((y0 + py) * w + x0 + px) as usize;
+                    out.color[o] = acc.map(|v| v / nn);
+                    out.wid[o] = s.wid[(py * n * s.sw + px * n) as usize];
                 }
-                let o = ((y0 + py) * w + px) as usize;
-                out.color[o] = acc.map(|v| v / nn);
-                out.wid[o] = s.wid[(py * n * s.sw + px * n) as usize];
             }
         }
     }
@@ -445,10 +457,15 @@ pub fn supersample(cfg: &Config, cmds: &[Command], n: u32) -> RefFrame {
     out
 }
 
-/// One band of samples.
+/// Samples [`supersample`] holds at once (33 bytes each).
+pub const SAMPLE_BUDGET: u64 = 1 << 21;
+
+/// One block of samples.
 struct Samples {
     n: u32,
-    /// First pixel row of the band.
+    /// First pixel column of the block.
+    x0: u32,
+    /// First pixel row of the block.
     y0: u32,
     sw: u32,
     sh: u32,
@@ -460,15 +477,20 @@ struct Samples {
 impl Samples {
     /// Sample index range covering pixel rectangle `r` (clipped), per row.
     fn pixels(&mut self, r: &Rect, mut f: impl FnMut(&mut Self, usize, i64, i64)) {
-        let band = Rect::new(0, self.y0 as i32, self.sw / self.n, self.sh / self.n);
+        let band = Rect::new(
+            self.x0 as i32,
+            self.y0 as i32,
+            self.sw / self.n,
+            self.sh / self.n,
+        );
         let Some(r) = r.intersect(&band) else { return };
-        let n = self.n as i64;
+        let (n, x0) = (self.n as i64, self.x0 as i64);
         for py in r.y as i64..r.y1() {
             for px in r.x as i64..r.x1() {
                 for j in 0..n {
                     for i in 0..n {
                         let sy = (py - self.y0 as i64) * n + j;
-                        let idx = (sy * self.sw as i64 + px * n + i) as usize;
+                        let idx = (sy * self.sw as i64 + (px - x0) * n + i) as usize;
                         f(self, idx, px, py);
                     }
                 }
@@ -496,15 +518,16 @@ impl Samples {
     /// pixels) lies in the bounding box `[x0, x1] x [y0, y1]`.
     fn samples_in(&mut self, bb: [f64; 4], mut f: impl FnMut(&mut Self, usize, f64, f64)) {
         let n = self.n as f64;
-        let (oy, sw, sh) = (self.y0 as f64, self.sw as i64, self.sh as i64);
-        // Sample (i, j) sits at ((i + 0.5) / n, y0 + (j + 0.5) / n).
-        let i0 = ((bb[0] * n - 0.5).ceil() as i64).max(0);
-        let i1 = ((bb[1] * n - 0.5).floor() as i64).min(sw - 1);
+        let (ox, oy) = (self.x0 as f64, self.y0 as f64);
+        let (sw, sh) = (self.sw as i64, self.sh as i64);
+        // Sample (i, j) sits at (x0 + (i + 0.5) / n, y0 + (j + 0.5) / n).
+        let i0 = (((bb[0] - ox) * n - 0.5).ceil() as i64).max(0);
+        let i1 = (((bb[1] - ox) * n - 0.5).floor() as i64).min(sw - 1);
         let j0 = (((bb[2] - oy) * n - 0.5).ceil() as i64).max(0);
         let j1 = (((bb[3] - oy) * n - 0.5).floor() as i64).min(sh - 1);
         for j in j0..=j1 {
             for i in i0..=i1 {
-                let (x, y) = ((i as f64 + 0.5) / n, oy + (j as f64 + 0.5) / n);
+                let (x, y) = (ox + (i as f64 + 0.5) / n, oy + (j as f64 + 0.5) / n);
                 f(self, (j * sw + i) as usize, x, y);
             }
         }

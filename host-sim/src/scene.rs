@@ -63,7 +63,7 @@
 //!
 //! [[command]]
 //! kind = "mesh"              # an OBJ with its .mtl colours, camera and light
-//! obj = "../../shared/models/teapot.obj"
+//! obj = "../assets/models/teapot.obj"
 //! eye = [0, 1, 3]
 //! rotate_y = 30
 //! edge_aa = true             # optional: antialias its silhouette and open boundary
@@ -77,6 +77,7 @@
 //! the line and the problem.
 
 use crate::mesh::{self, MeshSpec, MeshStats};
+use crate::obj::Limits;
 use crate::render::{Config, FormatKind};
 use serde::Deserialize;
 use std::path::Path;
@@ -86,7 +87,7 @@ use tilerast::prelude::*;
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct SceneFile {
-    screen: ScreenSpec,
+    screen: toml::Spanned<ScreenSpec>,
     #[serde(default)]
     window: Vec<toml::Spanned<WindowSpec>>,
     #[serde(default)]
@@ -222,6 +223,10 @@ fn line_style(s: &Option<StyleSpec>, phase: u16) -> LineStyle {
     )
 }
 
+fn fixes<T: tilerast::fixed::traits::Fixed>(v: &[f64; 3], what: &str) -> Result<[T; 3], String> {
+    Ok([fix(v[0], what)?, fix(v[1], what)?, fix(v[2], what)?])
+}
+
 fn point(p: [f64; 2]) -> Result<(Coord, Coord), String> {
     Ok((fix::<Coord>(p[0], "x")?, fix::<Coord>(p[1], "y")?))
 }
@@ -235,7 +240,8 @@ pub struct Scene {
     pub config: Config,
     /// Commands in drawing order (windows first).
     pub commands: Vec<Command>,
-    /// One line per mesh loaded.
+    /// One line per mesh loaded (saying whether its silhouette is
+    /// antialiased as the scene now stands), then one per warning.
     pub notes: Vec<String>,
     /// Mesh statistics, summed.
     pub mesh: MeshStats,
@@ -244,6 +250,10 @@ pub struct Scene {
     /// Every edge that edge antialiasing can draw (triangles' edges, meshes'
     /// silhouettes), and whether it is on.
     edges: Vec<(bool, Command)>,
+    /// Per mesh: its summary and its silhouette edges in `edges`.
+    meshes: Vec<(String, std::ops::Range<usize>)>,
+    /// What loading skipped or could not find.
+    warnings: Vec<String>,
 }
 
 /// The next object tag (wrapping past 65535 back to 1).
@@ -252,12 +262,41 @@ pub(crate) fn next_tag(tags: &mut u16) -> u16 {
     *tags
 }
 
-fn line_of(src: &str, offset: usize) -> usize {
-    src[..offset.min(src.len())]
-        .bytes()
-        .filter(|&b| b == b'\n')
-        .count()
-        + 1
+/// Line numbers of byte offsets, in `O(log lines)` each (finding them by
+/// counting newlines from the start made parsing quadratic).
+struct Lines<'a> {
+    src: &'a str,
+    /// Offset of every line start.
+    starts: Vec<usize>,
+}
+
+impl<'a> Lines<'a> {
+    fn new(src: &'a str) -> Self {
+        let starts = std::iter::once(0)
+            .chain(src.match_indices('\n').map(|(i, _)| i + 1))
+            .collect();
+        Lines { src, starts }
+    }
+
+    /// 1-based line of a byte offset.
+    fn of(&self, offset: usize) -> usize {
+        self.starts.partition_point(|&s| s <= offset)
+    }
+
+    /// The line of `key = ...` inside the table at `span`, or the table's
+    /// header line when the key is not written (a default).
+    fn key(&self, span: &std::ops::Range<usize>, key: &str) -> usize {
+        let (first, last) = (self.of(span.start), self.of(span.end.saturating_sub(1)));
+        (first..=last)
+            .find(|&n| {
+                let start = self.starts[n - 1];
+                let end = self.starts.get(n).copied().unwrap_or(self.src.len());
+                let line = self.src[start..end].trim_start();
+                line.strip_prefix(key)
+                    .is_some_and(|r| r.trim_start().starts_with('='))
+            })
+            .unwrap_or(first)
+    }
 }
 
 fn rect(r: [i32; 4]) -> Result<Rect, String> {
@@ -265,6 +304,17 @@ fn rect(r: [i32; 4]) -> Result<Rect, String> {
         return Err(format!("rectangle {r:?} has a negative size"));
     }
     Ok(Rect::new(r[0], r[1], r[2] as u32, r[3] as u32))
+}
+
+/// A coordinate as the core's `f32` entry point takes it: finite values
+/// beyond `f32`'s range stay finite (and out of the coordinate range), so
+/// `1e308` is reported as out of range, not as "infinite".
+pub(crate) fn coord_f32(v: f64) -> f32 {
+    if v.is_finite() {
+        v.clamp(-1e30, 1e30) as f32
+    } else {
+        v as f32
+    }
 }
 
 fn fix<T: tilerast::fixed::traits::Fixed>(v: f64, what: &str) -> Result<T, String> {
@@ -284,10 +334,27 @@ fn state(window: u8, mask: Option<u32>) -> State {
 
 impl Scene {
     /// Reads and checks a scene file; meshes are loaded relative to it.
+    /// Files and lines are bounded by the default [`Limits`].
     pub fn load(path: impl AsRef<Path>) -> Result<Scene, String> {
+        Scene::load_with(path, &Limits::default())
+    }
+
+    /// [`Scene::load`] with explicit limits on file size and line length
+    /// (the scene file and every OBJ and MTL it loads).
+    pub fn load_with(path: impl AsRef<Path>, limits: &Limits) -> Result<Scene, String> {
         let path = path.as_ref();
-        let src = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        let mut scene = Scene::parse(&src, path.parent().unwrap_or(Path::new(".")))
+        let bytes = crate::obj::read_bounded(path, limits)?;
+        let src = String::from_utf8(bytes)
+            .map_err(|e| format!("{}: not UTF-8 text: {e}", path.display()))?;
+        if let Some(n) = src.lines().position(|l| l.len() > limits.max_line) {
+            return Err(format!(
+                "{}:{}: line longer than the limit of {} bytes",
+                path.display(),
+                n + 1,
+                limits.max_line
+            ));
+        }
+        let mut scene = Scene::parse_with(&src, path.parent().unwrap_or(Path::new(".")), limits)
             .map_err(|e| format!("{}:{e}", path.display()))?;
         if let Some(stem) = path.file_stem() {
             scene.name = stem.to_string_lossy().into_owned();
@@ -297,43 +364,59 @@ impl Scene {
 
     /// Parses scene text; errors start with `line: `.
     pub fn parse(src: &str, base: &Path) -> Result<Scene, String> {
+        Scene::parse_with(src, base, &Limits::default())
+    }
+
+    /// [`Scene::parse`] with explicit limits for the files it loads.
+    pub fn parse_with(src: &str, base: &Path, limits: &Limits) -> Result<Scene, String> {
+        let lines = Lines::new(src);
         let file: SceneFile = toml::from_str(src).map_err(|e| {
-            let line = e.span().map(|s| line_of(src, s.start)).unwrap_or(0);
+            let line = e.span().map(|s| lines.of(s.start)).unwrap_or(0);
             format!("{line}: {}", e.message().trim())
         })?;
-        let s = &file.screen;
+        let screen_span = file.screen.span();
+        let at_screen = |key: &str, e: String| format!("{}: [screen] {e}", lines.key(&screen_span, key));
+        let s = file.screen.get_ref();
         let side_ok = |v: u16| (1..=MAX_SIDE).contains(&v);
-        if !side_ok(s.width) || !side_ok(s.height) {
-            return Err(format!(
-                "1: [screen] size {}x{} must be 1..={MAX_SIDE} per side",
-                s.width, s.height
-            ));
+        for (key, v) in [("width", s.width), ("height", s.height)] {
+            if !side_ok(v) {
+                return Err(at_screen(
+                    key,
+                    format!("size {}x{} must be 1..={MAX_SIDE} per side", s.width, s.height),
+                ));
+            }
         }
         if !side_ok(s.tile[0]) || !side_ok(s.tile[1]) {
-            return Err(format!(
-                "1: [screen] tile {:?} must be 1..={MAX_SIDE} per side",
-                s.tile
+            return Err(at_screen(
+                "tile",
+                format!("tile {:?} must be 1..={MAX_SIDE} per side", s.tile),
             ));
         }
         let tile_px = s.tile[0].min(s.width) as usize * s.tile[1].min(s.height) as usize;
         if tile_px > crate::render::SIM_GROUPS * 8 {
-            return Err(format!(
-                "1: [screen] tile {:?} exceeds the simulator's {} pixels",
-                s.tile,
-                crate::render::SIM_GROUPS * 8
+            return Err(at_screen(
+                "tile",
+                format!(
+                    "tile {:?} exceeds the simulator's {} pixels",
+                    s.tile,
+                    crate::render::SIM_GROUPS * 8
+                ),
             ));
         }
         if ![0, 2, 4, 8, 16].contains(&s.dither) {
-            return Err(format!(
-                "1: [screen] dither = {} must be 0, 2, 4, 8 or 16",
-                s.dither
+            return Err(at_screen(
+                "dither",
+                format!("dither = {} must be 0, 2, 4, 8 or 16", s.dither),
             ));
         }
         if s.aa != crate::render::AaKind::None && ![0, 4, 8].contains(&s.dither) {
-            return Err(format!(
-                "1: [screen] coverage antialiasing (aa = \"{}\") is built into the simulator with dither 0, 4 or 8, not {}",
-                s.aa.name(),
-                s.dither
+            return Err(at_screen(
+                "aa",
+                format!(
+                    "coverage antialiasing (aa = \"{}\") is built into the simulator with dither 0, 4 or 8, not {}",
+                    s.aa.name(),
+                    s.dither
+                ),
             ));
         }
         let [r, g, b] = s.background;
@@ -352,14 +435,15 @@ impl Scene {
             aa: s.aa,
         };
         let mut commands = Vec::new();
-        let mut notes = Vec::new();
+        let mut meshes = Vec::new();
         let mut mesh_stats = MeshStats::default();
+        let mut warnings = Vec::new();
         let mut edges = Vec::new();
         // Object tags for coverage antialiasing: one per triangle of the
         // file and per OBJ group, from 1.
         let mut tags = 0u16;
         for w in &file.window {
-            let line = line_of(src, w.span().start);
+            let line = lines.key(&w.span(), "rect");
             let w = w.get_ref();
             let r = rect(w.rect).map_err(|e| format!("{line}: {e}"))?;
             commands.push(Command::WidFill { rect: r, wid: w.id });
@@ -372,8 +456,12 @@ impl Scene {
             }
         }
         for c in &file.command {
-            let line = line_of(src, c.span().start);
-            let at = |e: String| format!("{line}: {e}");
+            let span = c.span();
+            // An error names the line of the key it is about.
+            let key = |k: &'static str| {
+                let line = lines.key(&span, k);
+                move |e: String| format!("{line}: {e}")
+            };
             let cmd = match c.get_ref() {
                 CommandSpec::Triangle {
                     v,
@@ -393,6 +481,7 @@ impl Scene {
                                 ))
                             }
                         };
+                        let at = key("v");
                         let z = p[2];
                         if !(z.is_finite() && (0.0..=65535.0).contains(&z)) {
                             return Err(at(format!("vertex {k}: z = {z} must be 0..=65535")));
@@ -402,9 +491,13 @@ impl Scene {
                             ch(4, "g").map_err(at)?,
                             ch(5, "b").map_err(at)?,
                         );
-                        vs[k] =
-                            Vertex::try_from_f32(p[0] as f32, p[1] as f32, z.round() as u16, color)
-                                .map_err(|e| at(format!("vertex {k}: {e}")))?;
+                        vs[k] = Vertex::try_from_f32(
+                            coord_f32(p[0]),
+                            coord_f32(p[1]),
+                            z.round() as u16,
+                            color,
+                        )
+                        .map_err(|e| at(format!("vertex {k}: {e}")))?;
                     }
                     // Each triangle of the file is an object of its own.
                     let st = State {
@@ -432,24 +525,12 @@ impl Scene {
                         x: *x,
                         y: *y,
                         len: *len,
-                        color: [0, 1, 2]
-                            .map(|i| fix::<ColorFix>(rgb[i], "rgb"))
-                            .into_iter()
-                            .collect::<Result<Vec<_>, _>>()
-                            .map_err(at)?
-                            .try_into()
-                            .unwrap(),
-                        dcolor: [0, 1, 2]
-                            .map(|i| fix::<ColorStep>(drgb[i], "drgb"))
-                            .into_iter()
-                            .collect::<Result<Vec<_>, _>>()
-                            .map_err(at)?
-                            .try_into()
-                            .unwrap(),
-                        z: fix::<ZFix>(*z, "z").map_err(at)?,
-                        dz: fix::<ZStep>(*dz, "dz").map_err(at)?,
+                        color: fixes::<ColorFix>(rgb, "rgb").map_err(key("rgb"))?,
+                        dcolor: fixes::<ColorStep>(drgb, "drgb").map_err(key("drgb"))?,
+                        z: fix::<ZFix>(*z, "z").map_err(key("z"))?,
+                        dz: fix::<ZStep>(*dz, "dz").map_err(key("dz"))?,
                     };
-                    span.validate().map_err(|e| at(e.to_string()))?;
+                    span.validate().map_err(|e| key("len")(e.to_string()))?;
                     Command::Span {
                         span,
                         state: state(*window, *plane_mask),
@@ -461,12 +542,12 @@ impl Scene {
                     window,
                     plane_mask,
                 } => Command::Fill {
-                    rect: rect(*r).map_err(at)?,
+                    rect: rect(*r).map_err(key("rect"))?,
                     color: Rgb::new(rgb[0], rgb[1], rgb[2]),
                     state: state(*window, *plane_mask),
                 },
                 CommandSpec::Zfill { rect: r, z, window } => Command::ZFill {
-                    rect: rect(*r).map_err(at)?,
+                    rect: rect(*r).map_err(key("rect"))?,
                     z: *z,
                     state: state(*window, None),
                 },
@@ -481,14 +562,14 @@ impl Scene {
                     plane_mask,
                 } => {
                     let line = LineCmd {
-                        p0: point(*from).map_err(at)?,
-                        p1: point(*to).map_err(at)?,
+                        p0: point(*from).map_err(key("from"))?,
+                        p1: point(*to).map_err(key("to"))?,
                         z: *z,
                         color: Rgb::new(rgb[0], rgb[1], rgb[2]),
                         style: line_style(style, 0),
                         antialias: *aa,
                     };
-                    line.validate().map_err(|e| at(e.to_string()))?;
+                    line.validate().map_err(|e| key("to")(e.to_string()))?;
                     Command::Line {
                         line,
                         state: state(*window, *plane_mask),
@@ -508,7 +589,7 @@ impl Scene {
                         .iter()
                         .map(|p| point(*p))
                         .collect::<Result<Vec<_>, _>>()
-                        .map_err(at)?;
+                        .map_err(key("points"))?;
                     if *closed && pts.len() > 2 {
                         pts.push(pts[0]);
                     }
@@ -522,7 +603,7 @@ impl Scene {
                             style: line_style(style, phase),
                             antialias: *aa,
                         };
-                        line.validate().map_err(|e| at(e.to_string()))?;
+                        line.validate().map_err(|e| key("points")(e.to_string()))?;
                         phase = line.next_phase();
                         commands.push(Command::Line {
                             line,
@@ -544,14 +625,20 @@ impl Scene {
                         &mut commands,
                         &mut found,
                         &mut tags,
+                        limits,
                     )
-                    .map_err(at)?;
+                    .map_err(key("obj"))?;
+                    let first_edge = edges.len();
                     edges.extend(found.into_iter().map(|e| (spec.edge_aa, e)));
-                    notes.push(format!(
-                        "mesh {}: {} vertices, {} triangles, {} groups, {} dropped (near plane / guard band), {} wireframe lines, {} silhouette edges{}",
+                    let mut note = format!(
+                        "mesh {}: {} vertices, {} triangles, {} groups, {} dropped (near plane / guard band), {} wireframe lines, {} silhouette edges",
                         spec.obj, st.vertices, st.triangles, st.groups, st.dropped, st.lines, st.edges,
-                        if spec.edge_aa { " (antialiased)" } else { "" }
-                    ));
+                    );
+                    if st.obj_lines > 0 {
+                        note += &format!(", {} OBJ lines", st.obj_lines);
+                    }
+                    meshes.push((note, first_edge..edges.len()));
+                    warnings.extend(st.warnings.iter().map(|w| format!("warning: {w}")));
                     mesh_stats.vertices += st.vertices;
                     mesh_stats.triangles += st.triangles;
                     mesh_stats.groups += st.groups;
@@ -566,9 +653,11 @@ impl Scene {
             config,
             solid_commands: commands.len(),
             commands,
-            notes,
+            notes: Vec::new(),
             mesh: mesh_stats,
             edges,
+            meshes,
+            warnings,
         };
         scene.rebuild_edges();
         Ok(scene)
@@ -591,6 +680,16 @@ impl Scene {
         self.commands.truncate(self.solid_commands);
         let on = self.edges.iter().filter(|e| e.0).map(|e| e.1);
         self.commands.extend(on);
+        let edges = &self.edges;
+        self.notes = self
+            .meshes
+            .iter()
+            .map(|(note, r)| {
+                let aa = !r.is_empty() && edges[r.clone()].iter().all(|e| e.0);
+                format!("{note}{}", if aa { " (antialiased)" } else { "" })
+            })
+            .chain(self.warnings.iter().cloned())
+            .collect();
     }
 
     /// Overrides every line's mode: two-point (Wu) antialiased or Bresenham.
@@ -640,7 +739,13 @@ impl Scene {
                     let mut index = std::collections::HashMap::new();
                     let mut tris = Vec::new();
                     while let Some(Command::Triangle { v, state: s }) = cmds.get(i) {
-                        if s != state || !small(v) || verts.len() + 3 > u16::MAX as usize {
+                        // A record holds up to 65535 vertices and triangles:
+                        // a larger group continues in the next record.
+                        if s != state
+                            || !small(v)
+                            || verts.len() + 3 > u16::MAX as usize
+                            || tris.len() >= u16::MAX as usize
+                        {
                             break;
                         }
                         tris.push(v.map(|v| {

@@ -81,7 +81,7 @@ pub struct Options {
 impl Default for Options {
     fn default() -> Self {
         Options {
-            models: Some(PathBuf::from("../shared/models")),
+            models: Some(PathBuf::from("assets/models")),
             runs: 15,
             ideal_samples: IDEAL_SAMPLES,
             progress: true,
