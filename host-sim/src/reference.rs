@@ -396,14 +396,20 @@ fn triangle(f: &mut RefFrame, cfg: &Config, v: &[Vertex; 3], wid: u8) {
 /// most 33 bytes per budgeted sample (about 69 MB) whatever `n`: a
 /// 4096x8 screen at 64x64 samples needs no more than a 240x160 one.
 pub fn supersample(cfg: &Config, cmds: &[Command], n: u32) -> RefFrame {
+    supersample_within(cfg, cmds, n, SAMPLE_BUDGET)
+}
+
+/// [`supersample`] holding at most `budget` samples (at least one pixel's)
+/// at once.
+pub fn supersample_within(cfg: &Config, cmds: &[Command], n: u32, budget: u64) -> RefFrame {
     let (w, h) = (cfg.width as u32, cfg.height as u32);
     let mut out = render(cfg, &[]);
     let n = n.max(1);
     let nn = (n * n) as f64;
     let per_px = (n as u64 * n as u64).max(1);
     // Whole rows (up to 8) when they fit the budget, else part of one row.
-    let rows = (SAMPLE_BUDGET / (per_px * w as u64)).clamp(1, 8) as u32;
-    let cols = (SAMPLE_BUDGET / per_px).clamp(1, w as u64) as u32;
+    let rows = (budget / (per_px * w as u64)).clamp(1, 8) as u32;
+    let cols = (budget / per_px).clamp(1, w as u64) as u32;
     for y0 in (0..h).step_by(rows as usize) {
         let bh = rows.min(h - y0);
         for x0 in (0..w).step_by(cols as usize) {

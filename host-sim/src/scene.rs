@@ -283,19 +283,23 @@ impl<'a> Lines<'a> {
         self.starts.partition_point(|&s| s <= offset)
     }
 
-    /// The line of `key = ...` inside the table at `span`, or the table's
-    /// header line when the key is not written (a default).
+    /// The line of `key = ...` in the table whose header is at `span`
+    /// (up to the next table header), or the header's line when the key
+    /// is not written (a default).
     fn key(&self, span: &std::ops::Range<usize>, key: &str) -> usize {
-        let (first, last) = (self.of(span.start), self.of(span.end.saturating_sub(1)));
-        (first..=last)
-            .find(|&n| {
+        let first = self.of(span.start);
+        (first..=self.starts.len())
+            .map(|n| {
                 let start = self.starts[n - 1];
                 let end = self.starts.get(n).copied().unwrap_or(self.src.len());
-                let line = self.src[start..end].trim_start();
+                (n, self.src[start..end].trim_start())
+            })
+            .take_while(|(n, line)| *n == first || !line.starts_with('['))
+            .find(|(_, line)| {
                 line.strip_prefix(key)
                     .is_some_and(|r| r.trim_start().starts_with('='))
             })
-            .unwrap_or(first)
+            .map_or(first, |(n, _)| n)
     }
 }
 
@@ -782,11 +786,12 @@ mod tests {
 
     #[test]
     fn errors_name_the_line() {
+        // Errors name the line of the key they are about.
         let e = err("\n[[command]]\nkind = \"fill\"\nrect = [0, 0, 4, -4]\nrgb = [1, 2, 3]\n");
-        assert!(e.starts_with("6: ") && e.contains("negative"), "{e}");
+        assert!(e.starts_with("8: ") && e.contains("negative"), "{e}");
         let e = err("\n[[command]]\nkind = \"triangle\"\nv = [[0, 0, 0, 0, 0, 0], [1e9, 0, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0]]\n");
         assert!(
-            e.starts_with("6: ") && e.contains("outside the documented range"),
+            e.starts_with("8: ") && e.contains("outside the documented range"),
             "{e}"
         );
         let e = err("\n[[command]]\nkind = \"circle\"\n");
@@ -794,7 +799,7 @@ mod tests {
         let e = Scene::parse("[screen]\nwidth = 99999\n", Path::new(".")).unwrap_err();
         assert!(e.starts_with("2: "), "{e}");
         let e = err("\n[[command]]\nkind = \"span\"\nx = 0\ny = 0\nlen = 300\nrgb = [0, 0, 0]\ndrgb = [1, 0, 0]\n");
-        assert!(e.starts_with("6: ") && e.contains("span"), "{e}");
+        assert!(e.starts_with("10: ") && e.contains("span"), "{e}");
     }
 
     #[test]
