@@ -45,7 +45,6 @@ impl Vertex {
     /// assert_eq!(Vertex::try_from_f32(f32::NAN, 2.0, 0, Rgb::default()), Err(Error::NotFinite));
     /// assert_eq!(Vertex::try_from_f32(1e9, 2.0, 0, Rgb::default()), Err(Error::CoordOutOfRange));
     /// ```
-    #[cfg(feature = "float")]
     pub fn try_from_f32(x: f32, y: f32, z: u16, color: Rgb) -> Result<Self, Error> {
         let c = |v: f32| -> Result<Coord, Error> {
             if !v.is_finite() {
@@ -178,6 +177,7 @@ impl SpanCmd {
 
 /// One display-list command.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum Command {
     /// A Gouraud-shaded, Z-tested triangle (either winding).
     Triangle {
@@ -236,6 +236,40 @@ pub enum Command {
 }
 
 impl Command {
+    /// The command's state (window ID, plane mask, object tag); `None` for
+    /// [`Command::WidFill`], which has none.
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// let f = Command::Fill { rect: Rect::new(0, 0, 2, 2), color: Rgb::new(1, 2, 3), state: State::new(4) };
+    /// assert_eq!(f.state().map(|s| s.wid), Some(4));
+    /// assert_eq!(Command::WidFill { rect: Rect::new(0, 0, 2, 2), wid: 4 }.state(), None);
+    /// ```
+    pub fn state(&self) -> Option<&State> {
+        match self {
+            Command::Triangle { state, .. }
+            | Command::Span { state, .. }
+            | Command::Line { state, .. }
+            | Command::Edge { state, .. }
+            | Command::Fill { state, .. }
+            | Command::ZFill { state, .. } => Some(state),
+            Command::WidFill { .. } => None,
+        }
+    }
+
+    /// The command's state, to change; `None` for [`Command::WidFill`].
+    pub fn state_mut(&mut self) -> Option<&mut State> {
+        match self {
+            Command::Triangle { state, .. }
+            | Command::Span { state, .. }
+            | Command::Line { state, .. }
+            | Command::Edge { state, .. }
+            | Command::Fill { state, .. }
+            | Command::ZFill { state, .. } => Some(state),
+            Command::WidFill { .. } => None,
+        }
+    }
+
     /// Checks the command against the numeric contract.
     pub fn validate(&self) -> Result<(), Error> {
         match self {

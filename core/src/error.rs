@@ -11,6 +11,7 @@
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum Error {
     /// The display list is at capacity.
     ListFull,
@@ -48,10 +49,19 @@ impl core::fmt::Display for Error {
     }
 }
 
+impl core::error::Error for Error {}
+
 /// Error from rendering a frame into a display: the raster core's or the
 /// display's own.
+///
+/// ```
+/// use tilerast::prelude::*;
+/// let e: FlushError<core::convert::Infallible> = Error::TileTooLarge.into();
+/// assert_eq!(e.to_string(), "raster: tile rectangle exceeds tile capacity");
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum FlushError<E> {
     /// The raster core rejected a command or the configuration.
     Raster(Error),
@@ -62,5 +72,43 @@ pub enum FlushError<E> {
 impl<E> From<Error> for FlushError<E> {
     fn from(e: Error) -> Self {
         FlushError::Raster(e)
+    }
+}
+
+impl<E: core::fmt::Debug> core::fmt::Display for FlushError<E> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            FlushError::Raster(e) => write!(f, "raster: {e}"),
+            FlushError::Target(e) => write!(f, "display: {e:?}"),
+        }
+    }
+}
+
+impl<E: core::fmt::Debug> core::error::Error for FlushError<E> {
+    fn source(&self) -> Option<&(dyn core::error::Error + 'static)> {
+        match self {
+            FlushError::Raster(e) => Some(e),
+            FlushError::Target(_) => None,
+        }
+    }
+}
+
+/// A display that cannot fail leaves only the raster core's error, so `?`
+/// converts.
+///
+/// ```
+/// use tilerast::prelude::*;
+/// fn render() -> Result<(), Error> {
+///     let e: FlushError<core::convert::Infallible> = Error::BadSize.into();
+///     Err(e)?
+/// }
+/// assert_eq!(render(), Err(Error::BadSize));
+/// ```
+impl From<FlushError<core::convert::Infallible>> for Error {
+    fn from(e: FlushError<core::convert::Infallible>) -> Self {
+        match e {
+            FlushError::Raster(e) => e,
+            FlushError::Target(never) => match never {},
+        }
     }
 }

@@ -15,6 +15,12 @@ use tilerast_sim::{metrics, reference, render, Image, Scene};
 struct Cli {
     #[command(subcommand)]
     cmd: Cmd,
+    /// Largest scene, OBJ or MTL file read, in bytes.
+    #[arg(long, global = true, default_value_t = tilerast_sim::Limits::default().max_bytes)]
+    max_file_bytes: u64,
+    /// Longest line read from those files, in bytes.
+    #[arg(long, global = true, default_value_t = tilerast_sim::Limits::default().max_line)]
+    max_line_bytes: usize,
 }
 
 /// Line antialiasing modes.
@@ -149,6 +155,11 @@ enum Cmd {
 }
 
 fn run(cli: Cli) -> Result<(), String> {
+    let limits = tilerast_sim::Limits {
+        max_bytes: cli.max_file_bytes,
+        max_line: cli.max_line_bytes,
+    };
+    let load = |p: &PathBuf| Scene::load_with(p, &limits);
     match cli.cmd {
         Cmd::Render {
             scene,
@@ -158,7 +169,7 @@ fn run(cli: Cli) -> Result<(), String> {
             edge_aa,
             aa,
         } => {
-            let mut s = Scene::load(&scene)?;
+            let mut s = load(&scene)?;
             if let Some(aa) = aa {
                 if aa != tilerast_sim::AaKind::None && ![0, 4, 8].contains(&s.config.dither) {
                     return Err(format!(
@@ -221,7 +232,7 @@ fn run(cli: Cli) -> Result<(), String> {
             samples,
             output,
         } => {
-            let s = Scene::load(&scene)?;
+            let s = load(&scene)?;
             let img = if samples > 1 {
                 reference::supersample(&s.config, &s.commands, samples)
             } else {
@@ -231,7 +242,7 @@ fn run(cli: Cli) -> Result<(), String> {
             println!("wrote {}", output.display());
         }
         Cmd::Export { scene, output } => {
-            let s = Scene::load(&scene)?;
+            let s = load(&scene)?;
             let bytes = s.encode().map_err(|e| e.to_string())?;
             std::fs::write(&output, &bytes).map_err(|e| format!("{}: {e}", output.display()))?;
             println!(
@@ -246,10 +257,7 @@ fn run(cli: Cli) -> Result<(), String> {
             output,
             image,
         } => {
-            let scenes = scenes
-                .iter()
-                .map(Scene::load)
-                .collect::<Result<Vec<_>, _>>()?;
+            let scenes = scenes.iter().map(load).collect::<Result<Vec<_>, _>>()?;
             let groups = tilerast_sim::aa::measure(&scenes);
             let table = tilerast_sim::aa::table(&groups);
             let md = format!(

@@ -72,6 +72,21 @@ pub struct MeshSpec {
     pub edge_aa: bool,
 }
 
+impl MeshSpec {
+    /// The spec of `obj` with every other field at its scene-file default.
+    ///
+    /// ```
+    /// let s = tilerast_sim::mesh::MeshSpec::new("teapot.obj");
+    /// assert_eq!((s.fov, s.eye), (40.0, [0.0, 0.0, 3.0]));
+    /// ```
+    pub fn new(obj: &str) -> Self {
+        use serde::Deserialize;
+        let mut t = toml::Table::new();
+        t.insert("obj".into(), toml::Value::String(obj.into()));
+        MeshSpec::deserialize(toml::Value::Table(t)).expect("every other field has a default")
+    }
+}
+
 fn default_true() -> bool {
     true
 }
@@ -189,7 +204,8 @@ fn norm(a: V3) -> V3 {
     }
 }
 
-/// Loads an OBJ and appends its triangles to `out`, one command each.
+/// Loads an OBJ (within `limits`) and appends its triangles to `out`, one
+/// command each ([`build`]).
 pub fn load(
     spec: &MeshSpec,
     base: &Path,
@@ -199,8 +215,21 @@ pub fn load(
     tags: &mut u16,
     limits: &crate::obj::Limits,
 ) -> Result<MeshStats, String> {
-    let path = base.join(&spec.obj);
-    let obj = crate::obj::load(&path, limits)?;
+    let obj = crate::obj::load(&base.join(&spec.obj), limits)?;
+    Ok(build(&obj, spec, screen, out, edges, tags))
+}
+
+/// Places, lights and projects a read OBJ: its triangles (and line
+/// elements) go to `out`, its silhouette edges to `edges` when
+/// `spec.edge_aa`; one object tag per group.
+pub fn build(
+    obj: &crate::obj::Obj,
+    spec: &MeshSpec,
+    screen: (u16, u16),
+    out: &mut Vec<Command>,
+    edges: &mut Vec<Command>,
+    tags: &mut u16,
+) -> MeshStats {
     let models = &obj.models;
     let mats = &obj.materials;
     let mut stats = MeshStats {
@@ -390,5 +419,5 @@ pub fn load(
             stats.edges += 1;
         }
     }
-    Ok(stats)
+    stats
 }

@@ -154,12 +154,7 @@ fn floats<const K: usize>(
 /// Reads an OBJ file and the `.mtl` files it names, within `limits`.
 pub fn load(path: &Path, limits: &Limits) -> Result<Obj, String> {
     let src = read_bounded(path, limits)?;
-    parse(
-        &src,
-        &path.display().to_string(),
-        path.parent(),
-        limits,
-    )
+    parse(&src, &path.display().to_string(), path.parent(), limits)
 }
 
 /// A vertex as faces name it: position, optional normal (0-based).
@@ -247,7 +242,8 @@ pub fn parse(src: &[u8], file: &str, dir: Option<&Path>, limits: &Limits) -> Res
                 let name = rest();
                 let material = cur.model.material;
                 if !cur.is_empty() {
-                    std::mem::replace(&mut cur, Builder::new(name, material)).finish(&mut obj.models);
+                    std::mem::replace(&mut cur, Builder::new(name, material))
+                        .finish(&mut obj.models);
                 } else {
                     cur.model.name = name;
                 }
@@ -290,7 +286,10 @@ pub fn parse(src: &[u8], file: &str, dir: Option<&Path>, limits: &Limits) -> Res
                 for w in words {
                     let col = column(&line, w);
                     let mut parts = w.split('/');
-                    let index = |s: Option<&str>, len: usize, what: &str| -> Result<Option<usize>, String> {
+                    let index = |s: Option<&str>,
+                                 len: usize,
+                                 what: &str|
+                     -> Result<Option<usize>, String> {
                         let Some(s) = s.filter(|s| !s.is_empty()) else {
                             return Ok(None);
                         };
@@ -329,10 +328,8 @@ pub fn parse(src: &[u8], file: &str, dir: Option<&Path>, limits: &Limits) -> Res
                     )),
                     ("l", _) => cur.model.lines.extend(ids.windows(2).map(|w| [w[0], w[1]])),
                     (_, 2) => {
-                        obj.warnings.push(format!(
-                            "{}: face with two vertices drawn as a line",
-                            at(1)
-                        ));
+                        obj.warnings
+                            .push(format!("{}: face with two vertices drawn as a line", at(1)));
                         cur.model.lines.push([ids[0], ids[1]]);
                     }
                     _ => {
@@ -443,9 +440,15 @@ pub fn triangulate(p: &[[f64; 3]]) -> Vec<[usize; 3]> {
         let ear = (0..m).find(|&i| {
             let (a, b, c) = (rest[(i + m - 1) % m], rest[i], rest[(i + 1) % m]);
             cross(a, b, c) > 0.0
-                && rest
-                    .iter()
-                    .all(|&x| x == a || x == b || x == c || q[x] == q[a] || q[x] == q[b] || q[x] == q[c] || !inside(a, b, c, x))
+                && rest.iter().all(|&x| {
+                    x == a
+                        || x == b
+                        || x == c
+                        || q[x] == q[a]
+                        || q[x] == q[b]
+                        || q[x] == q[c]
+                        || !inside(a, b, c, x)
+                })
         });
         let Some(i) = ear else {
             out.extend(fan(&rest));
@@ -473,7 +476,12 @@ mod tests {
 
     #[test]
     fn convex_polygons_keep_the_fan() {
-        let sq = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+        let sq = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ];
         assert_eq!(triangulate(&sq), [[0, 1, 2], [0, 2, 3]]);
     }
 

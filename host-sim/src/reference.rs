@@ -109,6 +109,7 @@ pub fn render(cfg: &Config, cmds: &[Command]) -> RefFrame {
             Command::Triangle { v, state } => triangle(&mut f, cfg, v, state.wid),
             Command::Line { line, state } => line_ref(&mut f, cfg, line, state.wid),
             Command::Edge { edge, state } => edge_ref(&mut f, cfg, edge, state.wid),
+            other => unimplemented!("the reference does not model {other:?} yet"),
         }
     }
     if cfg.format.is_gray() {
@@ -572,6 +573,7 @@ impl Samples {
             Command::Triangle { v, state } => self.triangle(cfg, v, state.wid),
             Command::Line { line, state } => self.line(cfg, line, state.wid),
             Command::Edge { .. } => {}
+            other => unimplemented!("the ideal does not model {other:?} yet"),
         }
     }
 

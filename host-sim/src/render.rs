@@ -66,6 +66,56 @@ pub struct Config {
     pub aa: AaKind,
 }
 
+impl Config {
+    /// The configuration an encoded scene's header asks for
+    /// ([`tilerast::wire::SceneHeader`]), rendered in its own tiles.
+    pub fn from_header(h: &tilerast::wire::SceneHeader) -> Result<Config, String> {
+        let name = h.format.split(|&b| b == 0).next().unwrap_or_default();
+        let format = [
+            FormatKind::Rgb888,
+            FormatKind::Rgb565,
+            FormatKind::Rgb444,
+            FormatKind::Gray8,
+            FormatKind::Binary,
+        ]
+        .into_iter()
+        .find(|f| f.name().as_bytes() == name)
+        .ok_or_else(|| format!("unknown format {:?}", String::from_utf8_lossy(name)))?;
+        let side = |v: u16| (1..=tilerast::numeric::MAX_SIDE).contains(&v);
+        if !(side(h.width) && side(h.height) && side(h.tile.0) && side(h.tile.1)) {
+            return Err(format!(
+                "bad screen {}x{} or tile {:?}",
+                h.width, h.height, h.tile
+            ));
+        }
+        let tile = (h.tile.0.min(h.width), h.tile.1.min(h.height));
+        if tile.0 as usize * tile.1 as usize > SIM_GROUPS * 8 {
+            return Err(format!("tile {tile:?} exceeds the simulator's tile"));
+        }
+        let dither = match h.dither_log2 {
+            0 => 0,
+            k @ 1..=4 => 1 << k,
+            k => return Err(format!("dither 2^{k} is not built")),
+        };
+        let plane = |bits: u8, on: u8, what: &str| match bits {
+            0 => Ok(false),
+            b if b == on => Ok(true),
+            b => Err(format!("{b}-bit {what} plane is not built")),
+        };
+        Ok(Config {
+            width: h.width,
+            height: h.height,
+            format,
+            tile,
+            dither,
+            depth: plane(h.depth_bits, 16, "depth")?,
+            wid: plane(h.wid_bits, 8, "window-ID")?,
+            clear: h.clear,
+            aa: AaKind::None,
+        })
+    }
+}
+
 /// Coverage antialiasing modes by name ([`tilerast::coverage`]).
 #[derive(
     Debug,
@@ -360,7 +410,7 @@ where
                     std::hint::black_box(t.raw(t.area().x, t.area().y));
                     Ok::<(), core::convert::Infallible>(())
                 })
-                .map_err(raster_error)?;
+                .map_err(Error::from)?;
             Ok(start.elapsed().as_nanos() as f64 / (w as f64 * h as f64))
         })
         .collect::<Result<_, Error>>()?;
@@ -383,7 +433,7 @@ where
             }
             Ok::<(), core::convert::Infallible>(())
         })
-        .map_err(raster_error)?;
+        .map_err(Error::from)?;
     Ok(Rendered {
         image,
         raw,
@@ -392,13 +442,6 @@ where
         stats,
         ns_per_pixel: times.get(times.len() / 2).copied(),
     })
-}
-
-fn raster_error(e: FlushError<core::convert::Infallible>) -> Error {
-    match e {
-        FlushError::Raster(e) => e,
-        FlushError::Target(never) => match never {},
-    }
 }
 
 use embedded_graphics_core::pixelcolor::RgbColor;

@@ -379,14 +379,18 @@ impl Scene {
             format!("{line}: {}", e.message().trim())
         })?;
         let screen_span = file.screen.span();
-        let at_screen = |key: &str, e: String| format!("{}: [screen] {e}", lines.key(&screen_span, key));
+        let at_screen =
+            |key: &str, e: String| format!("{}: [screen] {e}", lines.key(&screen_span, key));
         let s = file.screen.get_ref();
         let side_ok = |v: u16| (1..=MAX_SIDE).contains(&v);
         for (key, v) in [("width", s.width), ("height", s.height)] {
             if !side_ok(v) {
                 return Err(at_screen(
                     key,
-                    format!("size {}x{} must be 1..={MAX_SIDE} per side", s.width, s.height),
+                    format!(
+                        "size {}x{} must be 1..={MAX_SIDE} per side",
+                        s.width, s.height
+                    ),
                 ));
             }
         }

@@ -40,6 +40,8 @@ pub fn assert_golden(name: &str, img: &Image) {
 
 pub use tilerast_sim::rng::Rng;
 
+pub mod fuzz;
+
 /// A configuration with everything off but the format.
 pub fn config(w: u16, h: u16, format: FormatKind) -> Config {
     Config {

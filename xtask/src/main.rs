@@ -14,6 +14,12 @@
 //!   accuracy sweep (`reports/tradeoff.*`).
 //! - `report`: runs the firmware under QEMU, writes `reports/targets.md`
 //!   (instructions per pixel on Cortex-M0/M4, flash, RAM, stack).
+//! - `fuzz [--seconds N] [TARGET...]`: runs every cargo-fuzz target of
+//!   `fuzz/` (or those named) for N seconds each (default 60), growing and
+//!   then minimising `fuzz/corpus/<target>`; installs `cargo-fuzz` when
+//!   missing. libFuzzer needs nightly compiler flags: on a machine with
+//!   only the stable toolchain they are enabled with `RUSTC_BOOTSTRAP=1`.
+//!   A crash leaves its input in `fuzz/artifacts/<target>/` and fails the task.
 
 use std::process::{Command, ExitCode};
 
@@ -196,6 +202,10 @@ fn test() -> Result<(), String> {
     for b in BOARDS {
         run_in(&format!("targets/{b}"), "cargo", &["fmt", "--", "--check"])?;
     }
+    // The fuzz targets (their own workspace) must build; `cargo xtask fuzz`
+    // runs them, and the test below replays their corpora on stable.
+    run_in("fuzz", "cargo", &["fmt", "--", "--check"])?;
+    run_in("fuzz", "cargo", &["check", "--bins", "--locked"])?;
     // Every test, the firmware one (QEMU) included.
     let (passed, _) = cargo_test(&["test", "--workspace", "--", "--include-ignored"])?;
     if passed == 0 {
@@ -356,6 +366,72 @@ fn demo() -> Result<(), String> {
     )
 }
 
+/// The cargo-fuzz targets (`fuzz/fuzz_targets/*.rs`).
+const FUZZ_TARGETS: [&str; 5] = ["wire", "commands", "tile_api", "scene", "obj"];
+
+fn fuzz(args: &[String]) -> Result<(), String> {
+    let mut seconds = 60u64;
+    let mut targets = vec![];
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--seconds" => {
+                seconds = it
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .ok_or("--seconds takes a whole number")?
+            }
+            t if FUZZ_TARGETS.contains(&t) => targets.push(t),
+            t => return Err(format!("unknown fuzz target `{t}` (have {FUZZ_TARGETS:?})")),
+        }
+    }
+    if targets.is_empty() {
+        targets = FUZZ_TARGETS.to_vec();
+    }
+    let have = Command::new("cargo")
+        .args(["fuzz", "--version"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !have {
+        run("cargo", &["install", "cargo-fuzz", "--locked"])?;
+    }
+    let fuzz = |args: &[&str]| -> Result<(), String> {
+        eprintln!("xtask: (in fuzz) cargo fuzz {}", args.join(" "));
+        let st = Command::new("cargo")
+            .current_dir("fuzz")
+            .env("RUSTC_BOOTSTRAP", "1")
+            .arg("fuzz")
+            .args(args)
+            .status()
+            .map_err(|e| e.to_string())?;
+        if st.success() {
+            Ok(())
+        } else {
+            Err(format!("cargo fuzz {} failed ({st})", args.join(" ")))
+        }
+    };
+    let time = format!("-max_total_time={seconds}");
+    for t in targets {
+        let corpus = format!("corpus/{t}");
+        // Optimised, with debug assertions and overflow checks on (-a).
+        fuzz(&[
+            "run",
+            "-O",
+            "-a",
+            t,
+            &corpus,
+            "--",
+            &time,
+            "-rss_limit_mb=4096",
+            "-max_len=8192",
+        ])?;
+        // Keep what adds an edge (not a hit count): a corpus small enough
+        // for the repository and for the stable replay in `cargo xtask test`.
+        fuzz(&["cmin", "-O", "-a", t, &corpus, "--", "-use_counters=0"])?;
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     // Run from the workspace root whatever the caller's directory.
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
@@ -363,13 +439,17 @@ fn main() -> ExitCode {
         eprintln!("xtask: cannot enter {}: {e}", root.display());
         return ExitCode::FAILURE;
     }
-    let task = std::env::args().nth(1).unwrap_or_default();
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let task = args.first().cloned().unwrap_or_default();
     let result = match task.as_str() {
         "test" => test(),
         "demo" => demo(),
         "bench" => bench(),
         "report" => report(),
-        _ => Err("usage: cargo xtask <test|demo|bench|report>".into()),
+        "fuzz" => fuzz(&args[1..]),
+        _ => {
+            Err("usage: cargo xtask <test|demo|bench|report|fuzz [--seconds N] [TARGET...]>".into())
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -63,11 +63,7 @@ where
     let mut target =
         CrcTarget::<<K::F as PixelFormat>::Color>::new(Size::new(h.width as u32, h.height as u32));
     let mut buf: Tile<N, K::F, K::Z, K::W, K::D> = Tile::new();
-    let run =
-        run_scene(scene, &mut buf, tile, K::LABEL, &mut target, clock).map_err(|e| match e {
-            FlushError::Raster(e) => e,
-            FlushError::Target(never) => match never {},
-        })?;
+    let run = run_scene(scene, &mut buf, tile, K::LABEL, &mut target, clock)?;
     Ok((target.crc(), run))
 }
 

@@ -1,0 +1,352 @@
+//! The bodies of the fuzz targets (`fuzz/`, cargo-fuzz) and of their
+//! stable replay (`tests/tests/fuzz_replay.rs`): each takes arbitrary bytes
+//! and panics only on a finding; it returns whether the input got past
+//! parsing to the oracles (the replay checks that some do). One body per
+//! input surface:
+//!
+//! | target | input | oracle |
+//! | --- | --- | --- |
+//! | [`wire`] | an encoded scene (firmware flash) | decode never panics; every decoded command encodes and decodes to itself; tiled and whole-frame renders are equal |
+//! | [`commands`] | a configuration and a command list | tiling changes nothing; removing window W's commands changes no pixel outside W; a plane mask keeps every other bit |
+//! | [`tile_api`] | a sequence of tile calls | results match the documented contract (begin's errors, reads inside the area only, flush size) |
+//! | [`scene`] | scene-file text | parse errors, not panics; a parsed scene renders and survives the wire round trip |
+//! | [`obj`] | OBJ text | every index in range; the mesh builds and renders |
+
+use crate::{config, random_command, Rng};
+use tilerast::prelude::*;
+use tilerast::wire::{self, SceneHeader, MAX_ENCODED};
+use tilerast_sim::{render, AaKind, Config, FormatKind, Limits, Scene};
+
+/// Bytes read as numbers; zeros past the end.
+struct Bytes<'a>(&'a [u8]);
+
+impl Bytes<'_> {
+    fn u8(&mut self) -> u8 {
+        let (b, rest) = self.0.split_first().map_or((0, &[][..]), |(b, r)| (*b, r));
+        self.0 = rest;
+        b
+    }
+    fn u32(&mut self) -> u32 {
+        u32::from_le_bytes([self.u8(), self.u8(), self.u8(), self.u8()])
+    }
+    fn u64(&mut self) -> u64 {
+        self.u32() as u64 | (self.u32() as u64) << 32
+    }
+    /// A coordinate, biased towards the edges of the numeric domain.
+    fn coord(&mut self) -> i32 {
+        let lim = tilerast::numeric::COORD_LIMIT;
+        match self.u8() % 8 {
+            0 => i32::MAX - (self.u8() as i32),
+            1 => i32::MIN + (self.u8() as i32),
+            2 => lim - (self.u8() as i32),
+            3 => -lim + (self.u8() as i32) - 8,
+            _ => self.u8() as i32 - 64,
+        }
+    }
+    fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+}
+
+const LIMITS: Limits = Limits {
+    max_bytes: 1 << 20,
+    max_line: 1 << 12,
+};
+
+/// Screens larger than this are cut down before rendering (speed only).
+const MAX_RENDER_SIDE: u16 = 96;
+
+fn small(mut c: Config) -> Config {
+    c.width = c.width.min(MAX_RENDER_SIDE);
+    c.height = c.height.min(MAX_RENDER_SIDE);
+    c.tile = (c.tile.0.min(c.width), c.tile.1.min(c.height));
+    c
+}
+
+/// Renders tiled and as one tile; both must agree (or fail alike).
+fn tiling_is_invisible(c: &Config, cmds: &[Command]) -> Option<tilerast_sim::Rendered> {
+    let whole = Config {
+        tile: (c.width, c.height),
+        ..*c
+    };
+    match (render(c, cmds), render(&whole, cmds)) {
+        (Ok(a), Ok(b)) => {
+            assert_eq!(a.raw, b.raw, "tiling changed the colour");
+            assert_eq!(a.depth, b.depth, "tiling changed the depth");
+            Some(a)
+        }
+        (Err(a), Err(b)) => {
+            assert_eq!(a, b);
+            None
+        }
+        (a, b) => panic!("tiled {:?} vs whole {:?}", a.err(), b.err()),
+    }
+}
+
+/// An encoded scene: header and command stream.
+pub fn wire(data: &[u8]) -> bool {
+    let Ok((h, stream)) = SceneHeader::parse(data) else {
+        return false;
+    };
+    let cmds: Vec<Command> = stream.iter().map_while(Result::ok).take(256).collect();
+    for c in &cmds {
+        let mut buf = [0u8; MAX_ENCODED];
+        let n = wire::encode(c, &mut buf).expect("a decoded command encodes");
+        assert_eq!(wire::decode(&buf[..n]), Ok((*c, n)), "round trip");
+    }
+    match Config::from_header(&h) {
+        Ok(c) => tiling_is_invisible(&small(c), &cmds).is_some(),
+        Err(_) => false,
+    }
+}
+
+const W: u16 = 48;
+const H: u16 = 40;
+
+fn windows() -> [Command; 3] {
+    [
+        Command::WidFill {
+            rect: Rect::new(4, 4, 24, 20),
+            wid: 1,
+        },
+        Command::WidFill {
+            rect: Rect::new(20, 14, 26, 24),
+            wid: 2,
+        },
+        Command::WidFill {
+            rect: Rect::new(36, 0, 12, 8),
+            wid: 3,
+        },
+    ]
+}
+
+/// A configuration and a command list, drawn through the window-isolation
+/// and plane-mask oracles.
+pub fn commands(data: &[u8]) -> bool {
+    const FORMATS: [FormatKind; 5] = [
+        FormatKind::Rgb888,
+        FormatKind::Rgb565,
+        FormatKind::Rgb444,
+        FormatKind::Gray8,
+        FormatKind::Binary,
+    ];
+    let mut b = Bytes(data);
+    let mut c = config(W, H, FORMATS[b.u8() as usize % 5]);
+    c.depth = b.u8() & 1 == 1;
+    c.wid = true;
+    c.dither = [0, 2, 4, 8, 16][b.u8() as usize % 5];
+    c.tile = (1 + (b.u8() as u16 % W), 1 + (b.u8() as u16 % H));
+    let aa = AaKind::ALL[b.u8() as usize % AaKind::ALL.len()];
+    if [0, 4, 8].contains(&c.dither) && aa != AaKind::Grid8 {
+        c.aa = aa;
+    }
+    let mut rng = Rng::new(b.u64());
+    let mut cmds: Vec<Command> = (0..b.u8() % 8)
+        .map(|_| {
+            let wid = rng.range(0, 4) as u8;
+            random_command(&mut rng, wid)
+        })
+        .collect();
+    // The rest of the input as encoded commands (window fills left out:
+    // the window layout is fixed).
+    let rest = b.0;
+    cmds.extend(
+        wire::Encoded(rest)
+            .iter()
+            .map_while(Result::ok)
+            .filter(|c| !matches!(c, Command::WidFill { .. }))
+            .take(16),
+    );
+    let list = |cmds: &mut dyn Iterator<Item = Command>| -> Vec<Command> {
+        windows().into_iter().chain(cmds).collect()
+    };
+    let Some(all) = tiling_is_invisible(&c, &list(&mut cmds.iter().copied())) else {
+        return false;
+    };
+    // Window isolation: without window w's commands, nothing outside w changes.
+    let w = rng.range(0, 4) as u8;
+    let mut others = cmds
+        .iter()
+        .copied()
+        .filter(|c| c.state().is_none_or(|s| s.wid != w));
+    let without = render(&c, &list(&mut others)).expect("a subset of a valid list renders");
+    let wid_at = |x: i32, y: i32| {
+        windows().iter().fold(0, |id, c| match c {
+            Command::WidFill { rect, wid } if rect.intersect(&Rect::new(x, y, 1, 1)).is_some() => {
+                *wid
+            }
+            _ => id,
+        })
+    };
+    for i in 0..(W as usize * H as usize) {
+        let (x, y) = ((i % W as usize) as i32, (i / W as usize) as i32);
+        if wid_at(x, y) != w {
+            assert_eq!(
+                all.raw[i], without.raw[i],
+                "window {w}'s commands changed ({x}, {y})"
+            );
+            assert_eq!(
+                all.depth[i], without.depth[i],
+                "window {w}'s commands changed Z at ({x}, {y})"
+            );
+        }
+    }
+    // Plane mask: with every command masked by m, the other bits keep the
+    // clear colour.
+    let m = rng.next_u64() as u32;
+    let masked: Vec<Command> = cmds
+        .iter()
+        .map(|c| {
+            let mut c = *c;
+            if let Some(s) = c.state_mut() {
+                s.plane_mask &= m;
+            }
+            c
+        })
+        .collect();
+    let clear = render(&c, &[]).expect("an empty list renders").raw[0];
+    let r = render(&c, &list(&mut masked.into_iter())).expect("masks do not invalidate");
+    for (i, &p) in r.raw.iter().enumerate() {
+        assert_eq!(
+            (p ^ clear) & !m,
+            0,
+            "bits outside mask {m:#x} changed at pixel {i}"
+        );
+    }
+    true
+}
+
+/// A tile driven call by call.
+pub fn tile_api(data: &[u8]) -> bool {
+    use tilerast::coverage::Ruf8;
+    let mut b = Bytes(data);
+    match b.u8() % 3 {
+        0 => calls(
+            &mut b,
+            &mut Tile::<64, Rgb565Format, Depth16, Wid8, Bayer4>::new(),
+        ),
+        1 => calls(
+            &mut b,
+            &mut Tile::<64, Rgb888Format, Depth16, Wid8, NoDither, Ruf8>::new(),
+        ),
+        _ => calls(&mut b, &mut Tile::<64, BinaryFormat>::new()),
+    }
+}
+
+fn calls<const N: usize, F, Z, W, D, A>(b: &mut Bytes, t: &mut Tile<N, F, Z, W, D, A>) -> bool
+where
+    F: PixelFormat,
+    Z: tilerast::fragment::DepthMode,
+    W: tilerast::fragment::WidMode,
+    D: tilerast::dither::Dither,
+    A: tilerast::coverage::AaMode,
+    F::Color: embedded_graphics_core::pixelcolor::PixelColor + Default,
+{
+    use embedded_graphics_core::{draw_target::DrawTarget, geometry::Point, Pixel};
+    let mut begun = false;
+    for _ in 0..64 {
+        if b.is_empty() {
+            break;
+        }
+        match b.u8() % 6 {
+            0 => {
+                let r = Rect::new(b.coord(), b.coord(), b.u8() as u32 % 40, b.u8() as u32 % 40);
+                let lim = tilerast::numeric::COORD_LIMIT as i64;
+                let want = if r.w == 0 || r.h == 0 {
+                    Err(Error::BadSize)
+                } else if r.area() > 8 * N as u64 {
+                    Err(Error::TileTooLarge)
+                } else if (r.x as i64) < -lim || r.x1() > lim || (r.y as i64) < -lim || r.y1() > lim
+                {
+                    Err(Error::CoordOutOfRange)
+                } else {
+                    Ok(())
+                };
+                assert_eq!(t.begin(r, &Clear::default()), want, "{r:?}");
+                begun |= want.is_ok();
+            }
+            1 if begun => {
+                if let Ok((c, n)) = wire::decode(b.0) {
+                    b.0 = &b.0[n..];
+                    t.draw(&c).expect("decoded commands are valid");
+                } else {
+                    let _ = b.u8();
+                }
+            }
+            2 if begun => {
+                t.finish();
+            }
+            3 if begun => {
+                let (x, y) = (b.coord(), b.coord());
+                let a = t.area();
+                let inside = (a.x as i64..a.x1()).contains(&(x as i64))
+                    && (a.y as i64..a.y1()).contains(&(y as i64));
+                assert_eq!(t.raw(x, y).is_some(), inside);
+                assert_eq!(t.depth(x, y).is_some(), inside);
+                assert_eq!(t.wid(x, y).is_some(), inside);
+            }
+            4 if begun => {
+                let p = Point::new(b.coord(), b.coord());
+                let _ = t.draw_iter([Pixel(p, F::Color::default())]);
+            }
+            5 if begun => {
+                let a = t.area();
+                assert_eq!(t.colors().count() as u64, a.area());
+            }
+            _ => {}
+        }
+    }
+    begun
+}
+
+/// Scene-file text (meshes load relative to `scenes/`, as the corpus's
+/// copies of the repository's scenes expect).
+pub fn scene(data: &[u8]) -> bool {
+    let text = String::from_utf8_lossy(data);
+    let base = crate::repo().join("scenes");
+    let Ok(s) = Scene::parse_with(&text, &base, &LIMITS) else {
+        return false;
+    };
+    if let Ok(bytes) = s.encode() {
+        let (_, stream) = SceneHeader::parse(&bytes).expect("own header parses");
+        let back: Vec<Command> = stream
+            .iter()
+            .collect::<Result<_, _>>()
+            .expect("own stream decodes");
+        assert_eq!(back, s.commands, "wire round trip");
+    }
+    s.commands.len() > 8192 || tiling_is_invisible(&small(s.config), &s.commands).is_some()
+}
+
+/// OBJ text, read, built into a mesh and drawn.
+pub fn obj(data: &[u8]) -> bool {
+    let Ok(o) = tilerast_sim::obj::parse(data, "fuzz.obj", None, &LIMITS) else {
+        return false;
+    };
+    for m in &o.models {
+        let n = m.positions.len();
+        assert_eq!(m.finite.len(), n);
+        assert!(m.normals.is_empty() || m.normals.len() == n);
+        assert!(m
+            .triangles
+            .iter()
+            .flatten()
+            .chain(m.lines.iter().flatten())
+            .all(|&i| (i as usize) < n));
+        assert!(
+            m.finite.iter().all(|&f| f),
+            "faces with a bad vertex are dropped"
+        );
+    }
+    let mut spec = tilerast_sim::mesh::MeshSpec::new("fuzz.obj");
+    spec.edge_aa = true;
+    spec.wireframe = Some([255, 255, 0]);
+    let (mut cmds, mut edges, mut tags) = (Vec::new(), Vec::new(), 0);
+    tilerast_sim::mesh::build(&o, &spec, (64, 48), &mut cmds, &mut edges, &mut tags);
+    cmds.extend(edges);
+    let mut c = config(64, 48, FormatKind::Rgb565);
+    c.depth = true;
+    c.tile = (16, 16);
+    tiling_is_invisible(&c, &cmds).expect("built meshes are valid");
+    !cmds.is_empty()
+}

@@ -1,0 +1,104 @@
+//! The fuzz corpora (`fuzz/corpus/<target>/`) replayed on stable, without
+//! libFuzzer: every stored input through its target's body
+//! ([`tilerast_tests::fuzz`]), then a deterministic set of mutations of
+//! each, so a change that breaks an oracle fails here before anyone
+//! fuzzes. `cargo xtask fuzz --seconds N` grows the corpora.
+
+use tilerast_tests::{fuzz, repo, Rng};
+
+type Body = fn(&[u8]) -> bool;
+
+const TARGETS: [(&str, Body); 5] = [
+    ("wire", fuzz::wire),
+    ("commands", fuzz::commands),
+    ("tile_api", fuzz::tile_api),
+    ("scene", fuzz::scene),
+    ("obj", fuzz::obj),
+];
+
+/// Mutations per stored input (more with `FUZZ_REPLAY_MUTATIONS`).
+fn mutations() -> u64 {
+    std::env::var("FUZZ_REPLAY_MUTATIONS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(8)
+}
+
+fn mutate(rng: &mut Rng, input: &[u8]) -> Vec<u8> {
+    let mut v = input.to_vec();
+    for _ in 0..1 + rng.range(0, 4) {
+        let at = rng.range(0, v.len().max(1) as i64) as usize;
+        let last = v.len().saturating_sub(1);
+        match rng.range(0, 4) {
+            0 if !v.is_empty() => v[at.min(last)] ^= 1 << rng.range(0, 8),
+            1 if !v.is_empty() => v[at.min(last)] = rng.next_u64() as u8,
+            2 => v.insert(at.min(v.len()), rng.next_u64() as u8),
+            _ => v.truncate(at),
+        }
+    }
+    v
+}
+
+fn replay(name: &str, body: Body) {
+    let dir = repo().join("fuzz/corpus").join(name);
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|e| e.unwrap().path())
+        .collect();
+    files.sort();
+    assert!(!files.is_empty(), "{}: empty corpus", dir.display());
+    let mut reached = 0;
+    for f in &files {
+        let input = std::fs::read(f).unwrap();
+        reached += body(&input) as usize;
+        let mut rng = Rng::new(input.len() as u64 ^ 0x9E37_79B9_7F4A_7C15);
+        for _ in 0..mutations() {
+            body(&mutate(&mut rng, &input));
+        }
+    }
+    // The oracles are not vacuous: most stored inputs reach them.
+    assert!(
+        2 * reached >= files.len(),
+        "{name}: {reached} of {} inputs reach the oracles",
+        files.len()
+    );
+}
+
+#[test]
+fn wire_corpus() {
+    replay(TARGETS[0].0, TARGETS[0].1);
+}
+
+#[test]
+fn commands_corpus() {
+    replay(TARGETS[1].0, TARGETS[1].1);
+}
+
+#[test]
+fn tile_api_corpus() {
+    replay(TARGETS[2].0, TARGETS[2].1);
+}
+
+#[test]
+fn scene_corpus() {
+    replay(TARGETS[3].0, TARGETS[3].1);
+}
+
+#[test]
+fn obj_corpus() {
+    replay(TARGETS[4].0, TARGETS[4].1);
+}
+
+#[test]
+fn every_fuzz_target_has_a_corpus_and_a_binary() {
+    for (name, _) in TARGETS {
+        assert!(
+            repo()
+                .join("fuzz/fuzz_targets")
+                .join(format!("{name}.rs"))
+                .exists(),
+            "{name}"
+        );
+        assert!(repo().join("fuzz/corpus").join(name).is_dir(), "{name}");
+    }
+}
