@@ -35,6 +35,25 @@ impl Vertex {
         Vertex { x, y, z, color }
     }
 
+    /// A vertex at an `embedded-graphics` point (whole pixels: the corner
+    /// of pixel `p`; add half a pixel for its centre).
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// use embedded_graphics_core::geometry::Point;
+    /// let v = Vertex::at(Point::new(3, -2), 7, Rgb::new(1, 2, 3));
+    /// assert_eq!((v.x, v.y), (Coord::from_num(3), Coord::from_num(-2)));
+    /// ```
+    pub const fn at(p: embedded_graphics_core::geometry::Point, z: u16, color: Rgb) -> Self {
+        let s = SUBPIXEL as i32;
+        Vertex::new(
+            Coord::from_bits(p.x.saturating_mul(s)),
+            Coord::from_bits(p.y.saturating_mul(s)),
+            z,
+            color,
+        )
+    }
+
     /// A vertex from float pixel coordinates, rounded to the nearest 1/16
     /// pixel. NaN and infinities give [`Error::NotFinite`], coordinates
     /// outside `[-COORD_LIMIT, COORD_LIMIT)` give [`Error::CoordOutOfRange`].
@@ -177,6 +196,7 @@ impl SpanCmd {
 
 /// One display-list command.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum Command {
     /// A Gouraud-shaded, Z-tested triangle (either winding).
@@ -236,6 +256,94 @@ pub enum Command {
 }
 
 impl Command {
+    /// A Gouraud-shaded, Z-tested triangle in window 0 (either winding).
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// let v = |x: i32, y: i32| Vertex::new(Coord::from_num(x), Coord::from_num(y), 100, Rgb::new(255, 0, 0));
+    /// let t = Command::triangle([v(0, 0), v(8, 0), v(0, 8)]).window(2).plane_mask(0xF800);
+    /// assert_eq!(t.state(), Some(&State { wid: 2, plane_mask: 0xF800, tag: 0 }));
+    /// ```
+    pub const fn triangle(v: [Vertex; 3]) -> Command {
+        Command::Triangle {
+            v,
+            state: State::new(0),
+        }
+    }
+
+    /// A span in window 0 ([`SpanCmd`]).
+    pub const fn span(span: SpanCmd) -> Command {
+        Command::Span {
+            span,
+            state: State::new(0),
+        }
+    }
+
+    /// A line in window 0 ([`crate::line::LineCmd`]).
+    pub const fn line(line: crate::line::LineCmd) -> Command {
+        Command::Line {
+            line,
+            state: State::new(0),
+        }
+    }
+
+    /// An antialiased solid edge in window 0 ([`crate::line::EdgeCmd`]).
+    pub const fn edge(edge: crate::line::EdgeCmd) -> Command {
+        Command::Edge {
+            edge,
+            state: State::new(0),
+        }
+    }
+
+    /// A flat fill of `rect` in window 0.
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// let f = Command::fill(Rect::new(0, 0, 240, 240), Rgb::new(8, 8, 16));
+    /// assert_eq!(f.bounds(), Some(Rect::new(0, 0, 240, 240)));
+    /// ```
+    pub const fn fill(rect: Rect, color: Rgb) -> Command {
+        Command::Fill {
+            rect,
+            color,
+            state: State::new(0),
+        }
+    }
+
+    /// A Z fill of `rect` in window 0.
+    pub const fn zfill(rect: Rect, z: u16) -> Command {
+        Command::ZFill {
+            rect,
+            z,
+            state: State::new(0),
+        }
+    }
+
+    /// Claims `rect` for window `wid`, unconditionally.
+    pub const fn wid_fill(rect: Rect, wid: u8) -> Command {
+        Command::WidFill { rect, wid }
+    }
+
+    /// The same command drawing into window `wid` (a [`Command::WidFill`]
+    /// claims its pixels for `wid` instead).
+    pub const fn window(mut self, wid: u8) -> Command {
+        if let Command::WidFill { wid: w, .. } = &mut self {
+            *w = wid;
+        } else if let Some(state) = self.state_mut() {
+            state.wid = wid;
+        }
+        self
+    }
+
+    /// The same command writing only the colour bits in `mask` (in the
+    /// packed format's bits; no effect on window-ID and Z fills).
+    pub const fn plane_mask(mut self, mask: u32) -> Command {
+        if let Some(state) = self.state_mut() {
+            state.plane_mask = mask;
+        }
+        self
+    }
+
     /// The command's state (window ID, plane mask, object tag); `None` for
     /// [`Command::WidFill`], which has none.
     ///
@@ -245,7 +353,7 @@ impl Command {
     /// assert_eq!(f.state().map(|s| s.wid), Some(4));
     /// assert_eq!(Command::WidFill { rect: Rect::new(0, 0, 2, 2), wid: 4 }.state(), None);
     /// ```
-    pub fn state(&self) -> Option<&State> {
+    pub const fn state(&self) -> Option<&State> {
         match self {
             Command::Triangle { state, .. }
             | Command::Span { state, .. }
@@ -258,7 +366,7 @@ impl Command {
     }
 
     /// The command's state, to change; `None` for [`Command::WidFill`].
-    pub fn state_mut(&mut self) -> Option<&mut State> {
+    pub const fn state_mut(&mut self) -> Option<&mut State> {
         match self {
             Command::Triangle { state, .. }
             | Command::Span { state, .. }
@@ -304,6 +412,72 @@ impl Command {
             Command::Fill { rect, .. }
             | Command::ZFill { rect, .. }
             | Command::WidFill { rect, .. } => (rect.w > 0 && rect.h > 0).then_some(*rect),
+        }
+    }
+}
+
+/// `defmt` formats for the types that hold `fixed` numbers (which have none
+/// of their own): coordinates are logged in 1/16 px, span values as raw
+/// 16.16 bits.
+#[cfg(feature = "defmt")]
+mod log {
+    use super::{SpanCmd, Vertex};
+    use crate::line::{EdgeCmd, LineCmd};
+
+    impl defmt::Format for Vertex {
+        fn format(&self, f: defmt::Formatter) {
+            defmt::write!(
+                f,
+                "Vertex {{ x: {}/16, y: {}/16, z: {}, color: {} }}",
+                self.x.to_bits(),
+                self.y.to_bits(),
+                self.z,
+                self.color
+            )
+        }
+    }
+
+    impl defmt::Format for SpanCmd {
+        fn format(&self, f: defmt::Formatter) {
+            defmt::write!(
+                f,
+                "SpanCmd {{ x: {}, y: {}, len: {}, color: {}, dcolor: {}, z: {}, dz: {} }} (16.16 bits)",
+                self.x,
+                self.y,
+                self.len,
+                self.color.map(|c| c.to_bits()),
+                self.dcolor.map(|c| c.to_bits()),
+                self.z.to_bits(),
+                self.dz.to_bits()
+            )
+        }
+    }
+
+    impl defmt::Format for LineCmd {
+        fn format(&self, f: defmt::Formatter) {
+            let p =
+                |p: (crate::numeric::Coord, crate::numeric::Coord)| (p.0.to_bits(), p.1.to_bits());
+            defmt::write!(
+                f,
+                "LineCmd {{ p0: {}/16, p1: {}/16, z: {}, color: {}, style: {}, antialias: {} }}",
+                p(self.p0),
+                p(self.p1),
+                self.z,
+                self.color,
+                self.style,
+                self.antialias
+            )
+        }
+    }
+
+    impl defmt::Format for EdgeCmd {
+        fn format(&self, f: defmt::Formatter) {
+            defmt::write!(
+                f,
+                "EdgeCmd {{ v: {}, interior: {} }}",
+                self.v,
+                self.interior
+            )
         }
     }
 }

@@ -572,9 +572,9 @@ pub trait AaMode: 'static {
 }
 
 /// Per-pixel coverage state.
-pub trait AaPlane {
+pub trait AaPlane: Sized {
     /// A plane (contents undefined until cleared).
-    fn new() -> Self;
+    const NEW: Self;
     /// Clears pixel `i`: nothing covered, depth `z`, background `bg`.
     fn clear(&mut self, i: usize, z: u16, bg: Rgb);
     /// Applies a fragment to pixel `i`: covered samples, depth per sample
@@ -612,7 +612,7 @@ impl AaMode for NoAa {
 }
 
 impl AaPlane for () {
-    fn new() -> Self {}
+    const NEW: Self = ();
     fn clear(&mut self, _: usize, _: u16, _: Rgb) {}
     fn fragment(
         &mut self,
@@ -683,9 +683,7 @@ impl<const M: usize, P: SamplePattern + 'static> AaMode for Ss<M, P> {
 }
 
 impl<const M: usize, B: MaskBits, const N: usize> AaPlane for Cells<RufPixel<M, B>, N> {
-    fn new() -> Self {
-        Cells([[RufPixel::new(u16::MAX); 8]; N])
-    }
+    const NEW: Self = Cells([[RufPixel::new(u16::MAX); 8]; N]);
     #[inline]
     fn clear(&mut self, i: usize, z: u16, _: Rgb) {
         self.0.as_flattened_mut()[i] = RufPixel::new(z);
@@ -718,9 +716,7 @@ impl<const M: usize, B: MaskBits, const N: usize> AaPlane for Cells<RufPixel<M, 
 }
 
 impl<const M: usize, const N: usize> AaPlane for Cells<SsPixel<M>, N> {
-    fn new() -> Self {
-        Cells([[SsPixel::new(Rgb::new(0, 0, 0), u16::MAX); 8]; N])
-    }
+    const NEW: Self = Cells([[SsPixel::new(Rgb::new(0, 0, 0), u16::MAX); 8]; N]);
     #[inline]
     fn clear(&mut self, i: usize, z: u16, bg: Rgb) {
         self.0.as_flattened_mut()[i] = SsPixel::new(bg, z);

@@ -40,9 +40,23 @@ impl Rgb {
     }
 }
 
+/// Colours convert to and from `embedded-graphics`' `Rgb888`.
+///
+/// ```
+/// use tilerast::prelude::*;
+/// use embedded_graphics_core::pixelcolor::{Rgb888, RgbColor};
+/// assert_eq!(Rgb::from(Rgb888::CYAN), Rgb::new(0, 255, 255));
+/// assert_eq!(Rgb888::from(Rgb::new(1, 2, 3)), Rgb888::new(1, 2, 3));
+/// ```
 impl From<Rgb888> for Rgb {
     fn from(c: Rgb888) -> Self {
         Rgb::new(c.r(), c.g(), c.b())
+    }
+}
+
+impl From<Rgb> for Rgb888 {
+    fn from(c: Rgb) -> Self {
+        Rgb888::new(c.r, c.g, c.b)
     }
 }
 
@@ -81,9 +95,10 @@ impl<const C: usize> Lanes for [i32; C] {
 }
 
 /// Storage of one plane for `8 N` pixels; values travel as `u32`.
-pub trait ColorPlane {
-    /// A plane of zeros.
-    fn new() -> Self;
+pub trait ColorPlane: Sized {
+    /// A plane of zeros (a constant, so tiles can be built in `const`
+    /// context and live in a `static`).
+    const NEW: Self;
     /// The value at pixel index `i` (`i < 8 N`).
     fn get(&self, i: usize) -> u32;
     /// Stores `v` (already within the plane's bit width) at pixel index `i`.
@@ -92,6 +107,8 @@ pub trait ColorPlane {
 
 /// One element of a [`Plane`].
 pub trait Cell: Copy + Default {
+    /// Zero.
+    const ZERO: Self;
     /// Widens to `u32`.
     fn to_u32(self) -> u32;
     /// Narrows from `u32` (the value fits by construction).
@@ -99,6 +116,7 @@ pub trait Cell: Copy + Default {
 }
 
 impl Cell for u8 {
+    const ZERO: Self = 0;
     #[inline(always)]
     fn to_u32(self) -> u32 {
         self as u32
@@ -110,6 +128,7 @@ impl Cell for u8 {
 }
 
 impl Cell for u16 {
+    const ZERO: Self = 0;
     #[inline(always)]
     fn to_u32(self) -> u32 {
         self as u32
@@ -121,6 +140,7 @@ impl Cell for u16 {
 }
 
 impl Cell for u32 {
+    const ZERO: Self = 0;
     #[inline(always)]
     fn to_u32(self) -> u32 {
         self
@@ -133,6 +153,7 @@ impl Cell for u32 {
 
 /// Three bytes, `0xRRGGBB` order: RGB888 without padding.
 impl Cell for [u8; 3] {
+    const ZERO: Self = [0; 3];
     #[inline(always)]
     fn to_u32(self) -> u32 {
         (self[0] as u32) << 16 | (self[1] as u32) << 8 | self[2] as u32
@@ -148,7 +169,7 @@ impl Cell for [u8; 3] {
 ///
 /// ```
 /// use tilerast::format::{ColorPlane, Plane};
-/// let mut p: Plane<u16, 2> = Plane::new();
+/// let mut p: Plane<u16, 2> = Plane::NEW;
 /// p.set(15, 0xBEEF);
 /// assert_eq!(p.get(15), 0xBEEF);
 /// assert_eq!(core::mem::size_of::<Plane<u16, 2>>(), 32);
@@ -157,9 +178,7 @@ impl Cell for [u8; 3] {
 pub struct Plane<T, const N: usize>(pub [[T; 8]; N]);
 
 impl<T: Cell, const N: usize> ColorPlane for Plane<T, N> {
-    fn new() -> Self {
-        Plane([[T::default(); 8]; N])
-    }
+    const NEW: Self = Plane([[T::ZERO; 8]; N]);
     #[inline(always)]
     fn get(&self, i: usize) -> u32 {
         self.0.as_flattened()[i].to_u32()
@@ -174,7 +193,7 @@ impl<T: Cell, const N: usize> ColorPlane for Plane<T, N> {
 ///
 /// ```
 /// use tilerast::format::{BitPlane, ColorPlane};
-/// let mut p: BitPlane<4> = BitPlane::new(); // 32 pixels in 4 bytes
+/// let mut p: BitPlane<4> = BitPlane::NEW; // 32 pixels in 4 bytes
 /// p.set(9, 1);
 /// assert_eq!((p.get(8), p.get(9)), (0, 1));
 /// assert_eq!(core::mem::size_of::<BitPlane<4>>(), 4);
@@ -183,9 +202,7 @@ impl<T: Cell, const N: usize> ColorPlane for Plane<T, N> {
 pub struct BitPlane<const N: usize>(pub [u8; N]);
 
 impl<const N: usize> ColorPlane for BitPlane<N> {
-    fn new() -> Self {
-        BitPlane([0; N])
-    }
+    const NEW: Self = BitPlane([0; N]);
     #[inline(always)]
     fn get(&self, i: usize) -> u32 {
         (self.0[i >> 3] >> (i & 7)) as u32 & 1

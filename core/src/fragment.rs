@@ -18,9 +18,9 @@ use crate::format::{Cell, ColorPlane, Plane};
 use core::marker::PhantomData;
 
 /// Depth-plane storage.
-pub trait DepthPlane {
+pub trait DepthPlane: Sized {
     /// A new plane (contents are set by the tile's clear).
-    fn new() -> Self;
+    const NEW: Self;
     /// Sets pixel `i` to the integer depth `z` (clears, Z fills, resolved
     /// coverage).
     fn put(&mut self, i: usize, z: u16);
@@ -36,9 +36,9 @@ pub trait DepthPlane {
 }
 
 /// Window-ID plane storage.
-pub trait WidPlane {
+pub trait WidPlane: Sized {
     /// A new plane.
-    fn new() -> Self;
+    const NEW: Self;
     /// Sets pixel `i` to `id`.
     fn put(&mut self, i: usize, id: u8);
     /// Reads pixel `i` (0 when there is no plane).
@@ -123,9 +123,7 @@ impl<T: Cell, const FRAC: u32, const N: usize> ZPlane<T, FRAC, N> {
 }
 
 impl<T: Cell, const FRAC: u32, const N: usize> DepthPlane for ZPlane<T, FRAC, N> {
-    fn new() -> Self {
-        ZPlane(<Plane<T, N> as ColorPlane>::new())
-    }
+    const NEW: Self = ZPlane(<Plane<T, N> as ColorPlane>::NEW);
     #[inline(always)]
     fn put(&mut self, i: usize, z: u16) {
         self.0 .0.as_flattened_mut()[i] = T::from_u32((z as u32) << FRAC);
@@ -152,7 +150,7 @@ impl<T: Cell, const FRAC: u32, const N: usize> DepthPlane for ZPlane<T, FRAC, N>
 }
 
 impl DepthPlane for () {
-    fn new() -> Self {}
+    const NEW: Self = ();
     #[inline(always)]
     fn put(&mut self, _: usize, _: u16) {}
     #[inline(always)]
@@ -170,9 +168,7 @@ impl DepthPlane for () {
 }
 
 impl<const N: usize> WidPlane for Plane<u8, N> {
-    fn new() -> Self {
-        <Self as ColorPlane>::new()
-    }
+    const NEW: Self = <Self as ColorPlane>::NEW;
     #[inline(always)]
     fn put(&mut self, i: usize, id: u8) {
         self.0.as_flattened_mut()[i] = id;
@@ -188,7 +184,7 @@ impl<const N: usize> WidPlane for Plane<u8, N> {
 }
 
 impl WidPlane for () {
-    fn new() -> Self {}
+    const NEW: Self = ();
     #[inline(always)]
     fn put(&mut self, _: usize, _: u8) {}
     #[inline(always)]

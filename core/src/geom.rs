@@ -60,3 +60,28 @@ impl Rect {
         self.w as u64 * self.h as u64
     }
 }
+
+/// Rectangles convert to and from `embedded-graphics`' `Rectangle`.
+///
+/// ```
+/// use tilerast::prelude::*;
+/// use embedded_graphics_core::{geometry::{Point, Size}, primitives::Rectangle};
+/// let r = Rectangle::new(Point::new(-2, 3), Size::new(10, 4));
+/// assert_eq!(Rect::from(r), Rect::new(-2, 3, 10, 4));
+/// assert_eq!(Rectangle::from(Rect::new(-2, 3, 10, 4)), r);
+/// ```
+impl From<embedded_graphics_core::primitives::Rectangle> for Rect {
+    fn from(r: embedded_graphics_core::primitives::Rectangle) -> Self {
+        Rect::new(r.top_left.x, r.top_left.y, r.size.width, r.size.height)
+    }
+}
+
+impl From<Rect> for embedded_graphics_core::primitives::Rectangle {
+    fn from(r: Rect) -> Self {
+        use embedded_graphics_core::geometry::{Point, Size};
+        embedded_graphics_core::primitives::Rectangle::new(
+            Point::new(r.x, r.y),
+            Size::new(r.w, r.h),
+        )
+    }
+}

@@ -1,4 +1,6 @@
-//! # tilerast
+#![doc = include_str!("../README.md")]
+//!
+//! # The library
 //!
 //! A `#![no_std]`, fixed-point tile rasterizer for microcontrollers that drive
 //! small displays (SSD1306, ST7789, ILI9341 class). It implements the raster
@@ -16,7 +18,7 @@
 //! | bin | [`frame`] | each tile replays only the commands whose bounds touch it |
 //! | traverse | [`traverse`] | exact per-row coverage with the top-left fill rule |
 //! | span | [`span`] | the one span DDA every command type uses |
-//! | vector, AA | [`line`] | Bresenham and two-point (Wu) lines with sub-pixel endpoints and styles; edge antialiasing of solids |
+//! | vector, AA | [`line`](mod@line) | Bresenham and two-point (Wu) lines with sub-pixel endpoints and styles; edge antialiasing of solids |
 //! | fragment tests | [`fragment`] | window ID, then Z (less-than, read-modify-write) |
 //! | dither / pack | [`dither`], [`format`] | address-bit ordered dither, display formats |
 //! | tile planes | [`tile`] | colour, depth and window-ID planes chosen by type |

@@ -107,6 +107,45 @@ pub struct LineCmd {
     pub antialias: bool,
 }
 
+impl LineCmd {
+    /// A solid, aliased (Bresenham) line from `p0` to `p1` at depth 0.
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// let p = |x: i32, y: i32| (Coord::from_num(x), Coord::from_num(y));
+    /// let l = LineCmd::new(p(0, 0), p(10, 3), Rgb::new(255, 255, 0)).antialiased().depth([5, 9]);
+    /// assert!(l.antialias && l.z == [5, 9] && l.validate().is_ok());
+    /// ```
+    pub const fn new(p0: (Coord, Coord), p1: (Coord, Coord), color: Rgb) -> Self {
+        LineCmd {
+            p0,
+            p1,
+            z: [0, 0],
+            color,
+            style: LineStyle::SOLID,
+            antialias: false,
+        }
+    }
+
+    /// The same line with two-point (Wu) antialiasing.
+    pub const fn antialiased(self) -> Self {
+        LineCmd {
+            antialias: true,
+            ..self
+        }
+    }
+
+    /// The same line with depth `z[0]` at `p0` and `z[1]` at `p1`.
+    pub const fn depth(self, z: [u16; 2]) -> Self {
+        LineCmd { z, ..self }
+    }
+
+    /// The same line with an on/off pattern.
+    pub const fn styled(self, style: LineStyle) -> Self {
+        LineCmd { style, ..self }
+    }
+}
+
 /// A line in major/minor axes, ready to walk.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct LineSetup {

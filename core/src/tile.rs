@@ -88,14 +88,22 @@ impl<
     /// Pixel capacity: `8 N`.
     pub const CAPACITY: usize = 8 * N;
 
-    /// A tile with no area yet; call [`Tile::begin`].
-    pub fn new() -> Self {
+    /// A tile with no area yet; call [`Tile::begin`]. `const`, so a tile
+    /// can be a `static` (placed by the linker, not on the stack):
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// static TILE: Tile<300, Rgb565Format, Depth16> = Tile::new(); // 60x40 px
+    /// assert_eq!(Tile::<300, Rgb565Format, Depth16>::plane_bytes(), 9600);
+    /// assert!(core::mem::size_of_val(&TILE) < 9600 + 32);
+    /// ```
+    pub const fn new() -> Self {
         Tile {
-            color: ColorPlane::new(),
-            depth: DepthPlane::new(),
-            wid: WidPlane::new(),
-            aa: AaPlane::new(),
-            area: Rect::default(),
+            color: <F::Plane<N> as ColorPlane>::NEW,
+            depth: <Z::Plane<N> as DepthPlane>::NEW,
+            wid: <W::Plane<N> as WidPlane>::NEW,
+            aa: <A::Plane<N> as AaPlane>::NEW,
+            area: Rect::new(0, 0, 0, 0),
             resolved: false,
             _types: PhantomData,
         }
@@ -509,7 +517,8 @@ impl<
 /// A tile is itself a `DrawTarget` in screen coordinates: text and
 /// primitives drawn with `embedded-graphics` land on top of (or, drawn
 /// before the commands, under) the rasterized content, clipped to the tile.
-/// They write colour only: no window-ID or Z test, no plane mask.
+/// They write colour only: no window-ID or Z test, no plane mask (use
+/// [`Tile::overlay`] for those).
 ///
 /// ```
 /// use tilerast::prelude::*;
@@ -542,6 +551,135 @@ impl<
                 self.color.set(i, F::from_color(c));
             }
         }
+        Ok(())
+    }
+
+    fn fill_solid(&mut self, area: &Rectangle, color: F::Color) -> Result<(), Self::Error> {
+        let c = F::from_color(color);
+        self.for_each_pixel(&Rect::from(*area), |t, i| t.color.set(i, c));
+        Ok(())
+    }
+}
+
+impl<
+        const N: usize,
+        F: PixelFormat,
+        Z: DepthMode,
+        W: WidMode,
+        D: Dither,
+        A: AaMode,
+        P: Precision,
+    > Tile<N, F, Z, W, D, A, P>
+{
+    /// A `DrawTarget` over this tile whose pixels pass the fragment tests
+    /// like a command's: the window-ID test for `state.wid`, a Z test at
+    /// depth `z` (read only: text does not claim depth) and the plane mask.
+    /// Text in window 1 stays inside window 1 and behind nearer geometry.
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// use embedded_graphics_core::{pixelcolor::Rgb565, prelude::*};
+    /// let mut tile: Tile<8, Rgb565Format, Depth16, Wid8> = Tile::new();
+    /// tile.begin(Rect::new(0, 0, 8, 8), &Clear::default())?;
+    /// tile.draw(&Command::wid_fill(Rect::new(0, 0, 4, 8), 1))?;
+    /// tile.draw(&Command::zfill(Rect::new(0, 0, 8, 1), 10).window(1))?;
+    /// tile.overlay(State::new(1), 100)
+    ///     .fill_solid(&Rect::new(0, 0, 8, 8).into(), Rgb565::RED).ok();
+    /// assert_eq!(tile.pixel(1, 1), Some(Rgb565::RED));   // window 1, nothing nearer
+    /// assert_eq!(tile.pixel(1, 0), Some(Rgb565::BLACK)); // behind depth 10
+    /// assert_eq!(tile.pixel(5, 1), Some(Rgb565::BLACK)); // window 0
+    /// # Ok::<(), Error>(())
+    /// ```
+    pub fn overlay(&mut self, state: State, z: u16) -> Overlay<'_, N, F, Z, W, D, A, P> {
+        Overlay {
+            tile: self,
+            state,
+            z: (z as i32) << Z_FRAC,
+        }
+    }
+}
+
+/// A tile seen as a `DrawTarget` that tests window ID, depth and plane mask
+/// ([`Tile::overlay`]).
+pub struct Overlay<
+    't,
+    const N: usize,
+    F: PixelFormat,
+    Z: DepthMode,
+    W: WidMode,
+    D: Dither,
+    A: AaMode,
+    P: Precision,
+> {
+    tile: &'t mut Tile<N, F, Z, W, D, A, P>,
+    state: State,
+    /// Depth in the DDA's 16.14 format.
+    z: i32,
+}
+
+impl<
+        const N: usize,
+        F: PixelFormat,
+        Z: DepthMode,
+        W: WidMode,
+        D: Dither,
+        A: AaMode,
+        P: Precision,
+    > Overlay<'_, N, F, Z, W, D, A, P>
+{
+    /// Writes packed colour `c` at pixel `i` if it passes the tests.
+    fn put(t: &mut Tile<N, F, Z, W, D, A, P>, i: usize, c: u32, st: &State, z: i32) {
+        if t.wid.pass(i, st.wid) && t.depth.test(i, z) {
+            let mask = st.plane_mask & F::MASK_ALL;
+            t.color.set(i, (t.color.get(i) & !mask) | (c & mask));
+        }
+    }
+}
+
+impl<
+        const N: usize,
+        F: PixelFormat,
+        Z: DepthMode,
+        W: WidMode,
+        D: Dither,
+        A: AaMode,
+        P: Precision,
+    > Dimensions for Overlay<'_, N, F, Z, W, D, A, P>
+{
+    fn bounding_box(&self) -> Rectangle {
+        self.tile.bounding_box()
+    }
+}
+
+impl<
+        const N: usize,
+        F: PixelFormat,
+        Z: DepthMode,
+        W: WidMode,
+        D: Dither,
+        A: AaMode,
+        P: Precision,
+    > DrawTarget for Overlay<'_, N, F, Z, W, D, A, P>
+{
+    type Color = F::Color;
+    type Error = core::convert::Infallible;
+
+    fn draw_iter<I: IntoIterator<Item = Pixel<F::Color>>>(
+        &mut self,
+        pixels: I,
+    ) -> Result<(), Self::Error> {
+        for Pixel(p, c) in pixels {
+            if let Some(i) = self.tile.index(p.x, p.y) {
+                Self::put(self.tile, i, F::from_color(c), &self.state, self.z);
+            }
+        }
+        Ok(())
+    }
+
+    fn fill_solid(&mut self, area: &Rectangle, color: F::Color) -> Result<(), Self::Error> {
+        let (c, st, z) = (F::from_color(color), self.state, self.z);
+        self.tile
+            .for_each_pixel(&Rect::from(*area), |t, i| Self::put(t, i, c, &st, z));
         Ok(())
     }
 }

@@ -2,8 +2,8 @@
 //!
 //! The host side of tilerast: it reads a scene file ([`scene`]), renders it
 //! with the very same `no_std` core the firmware runs, tile by tile
-//! ([`render`]), writes PNGs ([`image`]), renders the same scene with an f64
-//! reference rasterizer ([`reference`]), and measures the difference
+//! ([`render`](mod@render)), writes PNGs ([`image`]), renders the same scene with an f64
+//! reference rasterizer ([`reference`](mod@reference)), and measures the difference
 //! ([`metrics`]).
 
 pub mod aa;

@@ -5,7 +5,7 @@
 //! and from `size_of` of our pixels) and Table 4 (memory traffic per access
 //! pattern), plus the renders and a chart.
 //!
-//! Every image is rendered by the core tile pipeline ([`crate::render`])
+//! Every image is rendered by the core tile pipeline ([`crate::render`](mod@crate::render))
 //! with the coverage plane chosen by type; the traffic count replays the
 //! same fragments ([`tilerast::coverage::fragments`]) through the same pixel
 //! updates ([`RufPixel::update_with`], [`SsPixel::update_with`]) and counts

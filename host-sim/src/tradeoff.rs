@@ -20,7 +20,7 @@
 //! so there is no "fast math" family: nothing to buy there.
 //!
 //! **Error** of each setting, against the f64 reference of the exact scene
-//! ([`reference`]): against the 16x16 supersampled ideal and against the
+//! ([`reference`](mod@reference)): against the 16x16 supersampled ideal and against the
 //! pixel-centre reference, seed 000 eq. 8 per pixel, PSNR and max error;
 //! after an 8x8 box blur, the RMS difference (what an eye at a distance sees
 //! of banding, which dither trades for noise); and *visible artifacts*,

@@ -6,7 +6,7 @@
 //!
 //! | target | input | oracle |
 //! | --- | --- | --- |
-//! | [`wire`] | an encoded scene (firmware flash) | decode never panics; every decoded command encodes and decodes to itself; tiled and whole-frame renders are equal |
+//! | [`wire()`] | an encoded scene (firmware flash) | decode never panics; every decoded command encodes and decodes to itself; tiled and whole-frame renders are equal |
 //! | [`commands`] | a configuration and a command list | tiling changes nothing; removing window W's commands changes no pixel outside W; a plane mask keeps every other bit |
 //! | [`tile_api`] | a sequence of tile calls | results match the documented contract (begin's errors, reads inside the area only, flush size) |
 //! | [`scene`] | scene-file text | parse errors, not panics; a parsed scene renders and survives the wire round trip |

@@ -64,29 +64,22 @@ fn replay(name: &str, body: Body) {
     );
 }
 
-#[test]
-fn wire_corpus() {
-    replay(TARGETS[0].0, TARGETS[0].1);
+/// One test per target, so they run in parallel and fail by name.
+macro_rules! corpus_tests {
+    ($($test:ident: $i:expr;)*) => {$(
+        #[test]
+        fn $test() {
+            replay(TARGETS[$i].0, TARGETS[$i].1);
+        }
+    )*};
 }
 
-#[test]
-fn commands_corpus() {
-    replay(TARGETS[1].0, TARGETS[1].1);
-}
-
-#[test]
-fn tile_api_corpus() {
-    replay(TARGETS[2].0, TARGETS[2].1);
-}
-
-#[test]
-fn scene_corpus() {
-    replay(TARGETS[3].0, TARGETS[3].1);
-}
-
-#[test]
-fn obj_corpus() {
-    replay(TARGETS[4].0, TARGETS[4].1);
+corpus_tests! {
+    wire_corpus: 0;
+    commands_corpus: 1;
+    tile_api_corpus: 2;
+    scene_corpus: 3;
+    obj_corpus: 4;
 }
 
 #[test]

@@ -70,9 +70,20 @@ fn cargo_test(args: &[&str]) -> Result<(u64, u64), String> {
     }
 }
 
+/// [`run`] with environment variables set.
+fn run_env(vars: &[(&str, &str)], program: &str, args: &[&str]) -> Result<(), String> {
+    run_with(".", vars, program, args)
+}
+
 /// [`run`] in another directory (a firmware workspace).
 fn run_in(dir: &str, program: &str, args: &[&str]) -> Result<(), String> {
-    let shown = format!("{program} {}", args.join(" "));
+    run_with(dir, &[], program, args)
+}
+
+/// Runs `program args` in `dir` with `vars` set, echoing the command.
+fn run_with(dir: &str, vars: &[(&str, &str)], program: &str, args: &[&str]) -> Result<(), String> {
+    let env: String = vars.iter().map(|(k, v)| format!("{k}={v} ")).collect();
+    let shown = format!("{env}{program} {}", args.join(" "));
     let place = if dir == "." {
         String::new()
     } else {
@@ -81,6 +92,7 @@ fn run_in(dir: &str, program: &str, args: &[&str]) -> Result<(), String> {
     eprintln!("xtask: {place}{shown}");
     let status = Command::new(program)
         .current_dir(dir)
+        .envs(vars.iter().copied())
         .args(args)
         .status()
         .map_err(|e| format!("cannot run {program}: {e}"))?;
@@ -159,6 +171,21 @@ fn test() -> Result<(), String> {
             "warnings",
         ],
     )?;
+    // The documentation builds without a warning (broken or ambiguous
+    // links, missing docs), the core's with every feature as docs.rs does.
+    let deny = [("RUSTDOCFLAGS", "-D warnings")];
+    run_env(&deny, "cargo", &["doc", "--no-deps", "--workspace"])?;
+    run_env(
+        &deny,
+        "cargo",
+        &["doc", "--no-deps", "-p", "tilerast", "--all-features"],
+    )?;
+    // The core packages as it would be published (its files, its metadata,
+    // and the packaged copy builds).
+    run(
+        "cargo",
+        &["package", "-p", "tilerast", "--allow-dirty", "--quiet"],
+    )?;
     for t in THUMB_TARGETS {
         run(
             "cargo",
@@ -214,18 +241,14 @@ fn test() -> Result<(), String> {
     // The firmware test exported the scenes the QEMU boards embed: lint them too.
     let scenes = std::fs::canonicalize("target/tmp/scenes")
         .map_err(|e| format!("target/tmp/scenes: {e}"))?;
+    let scenes = scenes.to_string_lossy();
     for b in ["mps2-an386", "microbit"] {
-        let dir = format!("targets/{b}");
-        eprintln!("xtask: (in {dir}) cargo clippy --release -- -D warnings");
-        let st = Command::new("cargo")
-            .current_dir(&dir)
-            .env("TILERAST_SCENES", &scenes)
-            .args(["clippy", "--release", "--", "-D", "warnings"])
-            .status()
-            .map_err(|e| e.to_string())?;
-        if !st.success() {
-            return Err(format!("clippy failed in {dir}"));
-        }
+        run_with(
+            &format!("targets/{b}"),
+            &[("TILERAST_SCENES", &scenes)],
+            "cargo",
+            &["clippy", "--release", "--", "-D", "warnings"],
+        )?;
     }
     // The closing line CI reads.
     println!("{passed} passed, 0 failed");
@@ -395,20 +418,10 @@ fn fuzz(args: &[String]) -> Result<(), String> {
     if !have {
         run("cargo", &["install", "cargo-fuzz", "--locked"])?;
     }
-    let fuzz = |args: &[&str]| -> Result<(), String> {
-        eprintln!("xtask: (in fuzz) cargo fuzz {}", args.join(" "));
-        let st = Command::new("cargo")
-            .current_dir("fuzz")
-            .env("RUSTC_BOOTSTRAP", "1")
-            .arg("fuzz")
-            .args(args)
-            .status()
-            .map_err(|e| e.to_string())?;
-        if st.success() {
-            Ok(())
-        } else {
-            Err(format!("cargo fuzz {} failed ({st})", args.join(" ")))
-        }
+    let fuzz = |args: &[&str]| {
+        let mut all = vec!["fuzz"];
+        all.extend_from_slice(args);
+        run_with("fuzz", &[("RUSTC_BOOTSTRAP", "1")], "cargo", &all)
     };
     let time = format!("-max_total_time={seconds}");
     for t in targets {

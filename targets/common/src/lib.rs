@@ -4,7 +4,7 @@
 //! `targets/` and by the host, so that the host can compute exactly what a
 //! board must output:
 //!
-//! - [`run_scene`]: replay an encoded scene (a [`wire`] header and its
+//! - [`run_scene`]: replay an encoded scene (a [`wire`](tilerast::wire) header and its
 //!   commands, typically `include_bytes!` in flash) tile by tile, draw a text
 //!   label on each tile with `embedded-graphics` (the tile is a
 //!   `DrawTarget`), and flush each tile to any `DrawTarget` — measuring

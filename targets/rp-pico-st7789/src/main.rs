@@ -5,17 +5,19 @@
 //! 115 KB frame buffer anywhere.
 //!
 //! Wiring (SPI0): GP18 SCK, GP19 MOSI, GP17 CS, GP16 DC, GP20 RST.
-//! Flash with a probe (`cargo run --release`) or `elf2uf2-rs`.
+//! Flash and watch the log with a probe (`cargo run --release`: probe-rs
+//! prints the `defmt` messages sent over RTT); a panic (`panic-probe`)
+//! prints its message the same way.
 #![no_std]
 #![no_main]
 
 use embedded_hal_bus::spi::ExclusiveDevice;
 use micromath::F32Ext;
 use mipidsi::{interface::SpiInterface, models::ST7789, options::ColorInversion, Builder};
-use panic_halt as _;
 use rp_pico::entry;
 use rp_pico::hal::{self, clocks::Clock, fugit::RateExtU32, gpio, pac, spi, Timer};
 use tilerast::prelude::*;
+use {defmt_rtt as _, panic_probe as _};
 
 /// 60x40 pixels = 300 groups of 8.
 type PanelTile = Tile<300, Rgb565Format, Depth16, NoWid, Bayer4>;
@@ -107,6 +109,7 @@ fn main() -> ! {
         .reset_pin(rst)
         .init(&mut timer)
         .unwrap();
+    defmt::info!("ST7789 ready; {} bytes per tile", PanelTile::plane_bytes());
 
     let mut frame = Frame::new(240, 240, 60, 40).unwrap();
     frame.clear = Clear {
@@ -116,10 +119,24 @@ fn main() -> ! {
     let mut tile = PanelTile::new();
     let mut list: DisplayList<4> = DisplayList::new();
     let mut angle = 0.0f32;
+    let mut frames = 0u32;
+    let mut since = timer.get_counter();
     loop {
-        if scene(&mut list, angle).is_ok() {
+        // Errors are reported, never discarded into a black screen.
+        match scene(&mut list, angle) {
             // The panel's `DrawTarget<Color = Rgb565>` receives each tile.
-            let _ = frame.render(&mut tile, &list, &mut display);
+            Ok(()) => match frame.render(&mut tile, &list, &mut display) {
+                Ok(_) => frames += 1,
+                Err(FlushError::Raster(e)) => defmt::error!("raster: {}", e),
+                Err(e) => defmt::error!("display: {}", defmt::Debug2Format(&e)),
+            },
+            Err(e) => defmt::error!("scene: {}", e),
+        }
+        let now = timer.get_counter();
+        let us = (now - since).to_micros();
+        if us >= 1_000_000 {
+            defmt::info!("{} frames/s", frames as u64 * 1_000_000 / us);
+            (frames, since) = (0, now);
         }
         angle += 0.05;
     }
