@@ -68,9 +68,9 @@ pub trait WidMode: 'static {
 ///
 /// ```
 /// use tilerast::prelude::*;
-/// assert_eq!(Tile::<64, Rgb565Format, Depth16>::bits_per_pixel(), 16 + 16);
-/// assert_eq!(Tile::<64, Rgb565Format, Depth24>::bits_per_pixel(), 16 + 24);
-/// assert_eq!(Tile::<64, Rgb565Format, Depth32>::bits_per_pixel(), 16 + 32);
+/// assert_eq!(Tile::<64, Planes<Rgb565Format, Depth16>>::bits_per_pixel(), 16 + 16);
+/// assert_eq!(Tile::<64, Planes<Rgb565Format, Depth24>>::bits_per_pixel(), 16 + 24);
+/// assert_eq!(Tile::<64, Planes<Rgb565Format, Depth32>>::bits_per_pixel(), 16 + 32);
 /// ```
 #[derive(Debug, Clone, Copy, Default)]
 pub struct DepthBits<T, const FRAC: u32>(PhantomData<T>);

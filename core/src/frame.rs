@@ -4,14 +4,13 @@
 //! byte-identical to rendering the frame as one big tile.
 
 use crate::command::Command;
+use crate::config::TileConfig;
 use crate::coverage::AaMode;
-use crate::dither::Dither;
 use crate::error::{Error, FlushError};
 use crate::format::{PixelFormat, Rgb};
-use crate::fragment::{DepthMode, WidMode};
 use crate::geom::Rect;
 use crate::list::DisplayList;
-use crate::numeric::{Precision, MAX_SIDE};
+use crate::numeric::MAX_SIDE;
 use crate::tile::Tile;
 use crate::wire::Encoded;
 use embedded_graphics_core::draw_target::DrawTarget;
@@ -156,28 +155,22 @@ impl Frame {
     /// Renders every tile and hands each finished tile to `done` (an
     /// overlay drawn with `embedded-graphics`, then a flush, a hash, a copy
     /// into a PNG...). Commands are validated once per frame.
-    pub fn render_with<const N: usize, F, Z, W, D, A, P, S, E>(
+    pub fn render_with<const N: usize, C: TileConfig, S, E>(
         &self,
-        tile: &mut Tile<N, F, Z, W, D, A, P>,
+        tile: &mut Tile<N, C>,
         cmds: &S,
-        mut done: impl FnMut(&mut Tile<N, F, Z, W, D, A, P>) -> Result<(), E>,
+        mut done: impl FnMut(&mut Tile<N, C>) -> Result<(), E>,
     ) -> Result<FrameStats, FlushError<E>>
     where
-        F: PixelFormat,
-        Z: DepthMode,
-        W: WidMode,
-        D: Dither,
-        A: AaMode,
-        P: Precision,
         S: CommandSource + ?Sized,
     {
         cmds.validate()?;
         let mut stats = FrameStats::default();
         for area in self.tiles() {
             tile.begin(area, &self.clear)?;
-            let mut replay = |tile: &mut Tile<N, F, Z, W, D, A, P>| {
+            let mut replay = |tile: &mut Tile<N, C>| {
                 cmds.each(|cmd| {
-                    let bounds = if A::SAMPLES > 0 {
+                    let bounds = if <C::Aa as AaMode>::SAMPLES > 0 {
                         cmd.coverage_bounds()
                     } else {
                         cmd.bounds()
@@ -201,22 +194,16 @@ impl Frame {
     }
 
     /// Renders every tile and flushes it to `target`.
-    pub fn render<const N: usize, F, Z, W, D, A, P, S, T>(
+    pub fn render<const N: usize, C: TileConfig, S, T>(
         &self,
-        tile: &mut Tile<N, F, Z, W, D, A, P>,
+        tile: &mut Tile<N, C>,
         cmds: &S,
         target: &mut T,
     ) -> Result<FrameStats, FlushError<T::Error>>
     where
-        F: PixelFormat,
-        Z: DepthMode,
-        W: WidMode,
-        D: Dither,
-        A: AaMode,
-        P: Precision,
         S: CommandSource + ?Sized,
         T: DrawTarget,
-        T::Color: From<F::Color>,
+        T::Color: From<<C::Format as PixelFormat>::Color>,
     {
         self.render_with(tile, cmds, |t| t.flush(target))
     }

@@ -29,14 +29,14 @@
 //!
 //! ## Model only what the scene requires
 //!
-//! A [`Tile`](tile::Tile)'s planes are type parameters. An absent depth or
+//! A [`Tile`](tile::Tile)'s planes are one configuration type ([`config`]). An absent depth or
 //! window-ID plane is `()`: zero bytes, and its test compiles to nothing.
 //!
 //! ```
 //! use tilerast::prelude::*;
 //!
-//! // 64x64 pixels (512 groups of 8), RGB565, 16-bit Z, no window IDs, 4x4 dither.
-//! type MyTile = Tile<512, Rgb565Format, Depth16, NoWid, Bayer4>;
+//! // 64x64 pixels, RGB565, 16-bit Z, no window IDs, 4x4 dither.
+//! type MyTile = Tile<{ groups(64, 64) }, Planes<Rgb565Format, Depth16, NoWid, Bayer4>>;
 //! assert_eq!(MyTile::bits_per_pixel(), 16 + 16);
 //! // The same tile without depth costs only its colour plane.
 //! assert_eq!(Tile::<512, Rgb565Format>::bits_per_pixel(), 16);
@@ -61,8 +61,9 @@
 //!     v: [v(4, 4, [255, 0, 0]), v(90, 10, [0, 255, 0]), v(40, 60, [0, 0, 255])],
 //!     state: State::default(),
 //! })?;
-//! let frame = Frame::new(96, 64, 32, 32)?;
-//! let mut tile: Tile<128, Rgb565Format, NoDepth, NoWid, Bayer4> = Tile::new();
+//! type Small = Tile<{ groups(32, 32) }, Planes<Rgb565Format, NoDepth, NoWid, Bayer4>>;
+//! let frame = Small::frame::<32, 32>(96, 64)?;
+//! let mut tile = Small::new();
 //! frame.render(&mut tile, &list, &mut display).map_err(|_| Error::TileTooLarge)?;
 //! # Ok::<(), tilerast::Error>(())
 //! ```
@@ -71,6 +72,7 @@
 #![forbid(unsafe_code)]
 
 pub mod command;
+pub mod config;
 pub mod coverage;
 pub mod dither;
 pub mod error;
@@ -97,6 +99,7 @@ pub use fixed;
 /// Everything a firmware author needs, in one import.
 pub mod prelude {
     pub use crate::command::{Command, SpanCmd, State, Vertex};
+    pub use crate::config::{groups, Planes, Ssd1306Config, St7789Config, TileConfig};
     pub use crate::dither::{Bayer, Bayer2, Bayer4, Bayer8, Dither, NoDither};
     pub use crate::error::{Error, FlushError};
     pub use crate::format::{

@@ -11,6 +11,7 @@
 //! unobserved value can overflow.
 
 use crate::command::{SpanCmd, State};
+use crate::config::TileConfig;
 use crate::coverage::AaMode;
 use crate::dither::{quantize, round_bias, Dither};
 use crate::format::{ColorPlane, Lanes, PixelFormat};
@@ -73,15 +74,15 @@ impl<L: Lanes> SpanStart<L> {
     }
 }
 
-impl<
-        const N: usize,
-        F: PixelFormat,
-        Z: DepthMode,
-        W: WidMode,
-        D: Dither,
-        A: AaMode,
-        P: Precision,
-    > Tile<N, F, Z, W, D, A, P>
+impl<const N: usize, C, F, Z, W, D, A, P> Tile<N, C>
+where
+    C: TileConfig<Format = F, Depth = Z, Wid = W, Dither = D, Aa = A, Precision = P>,
+    F: PixelFormat,
+    Z: DepthMode,
+    W: WidMode,
+    D: Dither,
+    A: AaMode,
+    P: Precision,
 {
     /// Draws `n >= 1` pixels from screen `(x, y)`, which the caller has
     /// clipped to this tile.

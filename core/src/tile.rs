@@ -7,15 +7,16 @@
 //! the exact cost) and their per-pixel test is the constant `true`.
 
 use crate::command::{Command, State};
-use crate::coverage::{AaMode, AaPlane, NoAa};
+use crate::config::TileConfig;
+use crate::coverage::{AaMode, AaPlane};
+use crate::dither::Dither;
 use crate::dither::{quantize, round_bias};
-use crate::dither::{Dither, NoDither};
 use crate::error::Error;
 use crate::format::{ColorPlane, Lanes, PixelFormat, Rgb};
-use crate::fragment::{DepthMode, DepthPlane, NoDepth, NoWid, WidMode, WidPlane};
+use crate::fragment::{DepthMode, DepthPlane, WidMode, WidPlane};
 use crate::frame::Clear;
 use crate::geom::Rect;
-use crate::numeric::{FullPrecision, Precision, COLOR_FRAC, SUBPIXEL as SUBPIXEL_I64, Z_FRAC};
+use crate::numeric::{Precision, COLOR_FRAC, SUBPIXEL as SUBPIXEL_I64, Z_FRAC};
 use crate::setup::TriangleSetup;
 use crate::span::SpanStart;
 use crate::traverse::for_each_span;
@@ -32,7 +33,7 @@ use embedded_graphics_core::{
 ///
 /// ```
 /// use tilerast::prelude::*;
-/// let mut tile: Tile<8, Rgb888Format, Depth16> = Tile::new(); // 64 pixels
+/// let mut tile: Tile<8, Planes<Rgb888Format, Depth16>> = Tile::new(); // 64 pixels
 /// tile.begin(Rect::new(16, 8, 8, 8), &Clear::default())?;
 /// tile.draw(&Command::Fill { rect: Rect::new(0, 0, 20, 10), color: Rgb::new(9, 8, 7), state: State::default() })?;
 /// assert_eq!(tile.raw(19, 9), Some(0x090807));
@@ -41,60 +42,83 @@ use embedded_graphics_core::{
 /// assert_eq!(tile.depth(16, 8), Some(0xFFFF));
 /// # Ok::<(), Error>(())
 /// ```
-pub struct Tile<
-    const N: usize,
-    F: PixelFormat,
-    Z: DepthMode = NoDepth,
-    W: WidMode = NoWid,
-    D: Dither = NoDither,
-    A: AaMode = NoAa,
-    P: Precision = FullPrecision,
-> {
-    pub(crate) color: F::Plane<N>,
-    pub(crate) depth: Z::Plane<N>,
-    pub(crate) wid: W::Plane<N>,
-    pub(crate) aa: A::Plane<N>,
+pub struct Tile<const N: usize, C: TileConfig> {
+    pub(crate) color: <C::Format as PixelFormat>::Plane<N>,
+    pub(crate) depth: <C::Depth as DepthMode>::Plane<N>,
+    pub(crate) wid: <C::Wid as WidMode>::Plane<N>,
+    pub(crate) aa: <C::Aa as AaMode>::Plane<N>,
     pub(crate) area: Rect,
     /// Coverage resolved into the colour plane ([`Tile::finish`]).
     resolved: bool,
-    _types: PhantomData<(D, P)>,
+    _config: PhantomData<C>,
 }
 
-impl<
-        const N: usize,
-        F: PixelFormat,
-        Z: DepthMode,
-        W: WidMode,
-        D: Dither,
-        A: AaMode,
-        P: Precision,
-    > Default for Tile<N, F, Z, W, D, A, P>
+impl<const N: usize, C, F, Z, W, D, A, P> Default for Tile<N, C>
+where
+    C: TileConfig<Format = F, Depth = Z, Wid = W, Dither = D, Aa = A, Precision = P>,
+    F: PixelFormat,
+    Z: DepthMode,
+    W: WidMode,
+    D: Dither,
+    A: AaMode,
+    P: Precision,
 {
     fn default() -> Self {
         Self::new()
     }
 }
 
-impl<
-        const N: usize,
-        F: PixelFormat,
-        Z: DepthMode,
-        W: WidMode,
-        D: Dither,
-        A: AaMode,
-        P: Precision,
-    > Tile<N, F, Z, W, D, A, P>
+impl<const N: usize, C, F, Z, W, D, A, P> Tile<N, C>
+where
+    C: TileConfig<Format = F, Depth = Z, Wid = W, Dither = D, Aa = A, Precision = P>,
+    F: PixelFormat,
+    Z: DepthMode,
+    W: WidMode,
+    D: Dither,
+    A: AaMode,
+    P: Precision,
 {
     /// Pixel capacity: `8 N`.
     pub const CAPACITY: usize = 8 * N;
+
+    /// A frame for a `width x height` screen in tiles of `TW x TH` pixels
+    /// that this tile type holds: a tile size larger than the type's
+    /// capacity does not compile (the screen size is checked at run time,
+    /// as [`Frame::new`](crate::frame::Frame::new) does).
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// type PanelTile = Tile<{ groups(60, 40) }, St7789Config>;
+    /// let frame = PanelTile::frame::<60, 40>(240, 240)?;
+    /// assert_eq!(frame.tile_size(), (60, 40));
+    /// # Ok::<(), Error>(())
+    /// ```
+    ///
+    /// ```compile_fail
+    /// use tilerast::prelude::*;
+    /// type PanelTile = Tile<{ groups(60, 40) }, St7789Config>;
+    /// let frame = PanelTile::frame::<64, 40>(240, 240); // 2560 > 2400 pixels
+    /// ```
+    pub fn frame<const TW: u16, const TH: u16>(
+        width: u16,
+        height: u16,
+    ) -> Result<crate::frame::Frame, Error> {
+        const {
+            assert!(
+                TW as usize * TH as usize <= 8 * N,
+                "the frame's tiles hold more pixels than the tile type"
+            )
+        };
+        crate::frame::Frame::new(width, height, TW, TH)
+    }
 
     /// A tile with no area yet; call [`Tile::begin`]. `const`, so a tile
     /// can be a `static` (placed by the linker, not on the stack):
     ///
     /// ```
     /// use tilerast::prelude::*;
-    /// static TILE: Tile<300, Rgb565Format, Depth16> = Tile::new(); // 60x40 px
-    /// assert_eq!(Tile::<300, Rgb565Format, Depth16>::plane_bytes(), 9600);
+    /// static TILE: Tile<300, Planes<Rgb565Format, Depth16>> = Tile::new(); // 60x40 px
+    /// assert_eq!(Tile::<300, Planes<Rgb565Format, Depth16>>::plane_bytes(), 9600);
     /// assert!(core::mem::size_of_val(&TILE) < 9600 + 32);
     /// ```
     pub const fn new() -> Self {
@@ -105,7 +129,7 @@ impl<
             aa: <A::Plane<N> as AaPlane>::NEW,
             area: Rect::new(0, 0, 0, 0),
             resolved: false,
-            _types: PhantomData,
+            _config: PhantomData,
         }
     }
 
@@ -114,15 +138,15 @@ impl<
     /// ```
     /// use tilerast::prelude::*;
     /// assert_eq!(Tile::<64, BinaryFormat>::bits_per_pixel(), 1);
-    /// assert_eq!(Tile::<64, Rgb444Format, Depth16, Wid8>::bits_per_pixel(), 16 + 16 + 8);
-    /// assert_eq!(Tile::<64, Rgb888Format, Depth16, Wid8>::bits_per_pixel(), 24 + 16 + 8);
+    /// assert_eq!(Tile::<64, Planes<Rgb444Format, Depth16, Wid8>>::bits_per_pixel(), 16 + 16 + 8);
+    /// assert_eq!(Tile::<64, Planes<Rgb888Format, Depth16, Wid8>>::bits_per_pixel(), 24 + 16 + 8);
     /// ```
-    pub fn bits_per_pixel() -> u32 {
+    pub const fn bits_per_pixel() -> u32 {
         (Self::plane_bytes() * 8 / Self::CAPACITY) as u32
     }
 
     /// Bytes of all planes together (`size_of` of the planes, no padding added).
-    pub fn plane_bytes() -> usize {
+    pub const fn plane_bytes() -> usize {
         core::mem::size_of::<F::Plane<N>>()
             + core::mem::size_of::<Z::Plane<N>>()
             + core::mem::size_of::<W::Plane<N>>()
@@ -497,15 +521,15 @@ impl<
     }
 }
 
-impl<
-        const N: usize,
-        F: PixelFormat,
-        Z: DepthMode,
-        W: WidMode,
-        D: Dither,
-        A: AaMode,
-        P: Precision,
-    > Dimensions for Tile<N, F, Z, W, D, A, P>
+impl<const N: usize, C, F, Z, W, D, A, P> Dimensions for Tile<N, C>
+where
+    C: TileConfig<Format = F, Depth = Z, Wid = W, Dither = D, Aa = A, Precision = P>,
+    F: PixelFormat,
+    Z: DepthMode,
+    W: WidMode,
+    D: Dither,
+    A: AaMode,
+    P: Precision,
 {
     /// The tile's screen rectangle: `embedded-graphics` drawing is clipped to it.
     fn bounding_box(&self) -> Rectangle {
@@ -529,15 +553,15 @@ impl<
 /// assert_eq!(tile.pixel(9, 1), Some(Rgb565::RED));
 /// # Ok::<(), Error>(())
 /// ```
-impl<
-        const N: usize,
-        F: PixelFormat,
-        Z: DepthMode,
-        W: WidMode,
-        D: Dither,
-        A: AaMode,
-        P: Precision,
-    > DrawTarget for Tile<N, F, Z, W, D, A, P>
+impl<const N: usize, C, F, Z, W, D, A, P> DrawTarget for Tile<N, C>
+where
+    C: TileConfig<Format = F, Depth = Z, Wid = W, Dither = D, Aa = A, Precision = P>,
+    F: PixelFormat,
+    Z: DepthMode,
+    W: WidMode,
+    D: Dither,
+    A: AaMode,
+    P: Precision,
 {
     type Color = F::Color;
     type Error = core::convert::Infallible;
@@ -561,15 +585,15 @@ impl<
     }
 }
 
-impl<
-        const N: usize,
-        F: PixelFormat,
-        Z: DepthMode,
-        W: WidMode,
-        D: Dither,
-        A: AaMode,
-        P: Precision,
-    > Tile<N, F, Z, W, D, A, P>
+impl<const N: usize, C, F, Z, W, D, A, P> Tile<N, C>
+where
+    C: TileConfig<Format = F, Depth = Z, Wid = W, Dither = D, Aa = A, Precision = P>,
+    F: PixelFormat,
+    Z: DepthMode,
+    W: WidMode,
+    D: Dither,
+    A: AaMode,
+    P: Precision,
 {
     /// A `DrawTarget` over this tile whose pixels pass the fragment tests
     /// like a command's: the window-ID test for `state.wid`, a Z test at
@@ -579,7 +603,7 @@ impl<
     /// ```
     /// use tilerast::prelude::*;
     /// use embedded_graphics_core::{pixelcolor::Rgb565, prelude::*};
-    /// let mut tile: Tile<8, Rgb565Format, Depth16, Wid8> = Tile::new();
+    /// let mut tile: Tile<8, Planes<Rgb565Format, Depth16, Wid8>> = Tile::new();
     /// tile.begin(Rect::new(0, 0, 8, 8), &Clear::default())?;
     /// tile.draw(&Command::wid_fill(Rect::new(0, 0, 4, 8), 1))?;
     /// tile.draw(&Command::zfill(Rect::new(0, 0, 8, 1), 10).window(1))?;
@@ -590,7 +614,7 @@ impl<
     /// assert_eq!(tile.pixel(5, 1), Some(Rgb565::BLACK)); // window 0
     /// # Ok::<(), Error>(())
     /// ```
-    pub fn overlay(&mut self, state: State, z: u16) -> Overlay<'_, N, F, Z, W, D, A, P> {
+    pub fn overlay(&mut self, state: State, z: u16) -> Overlay<'_, N, C> {
         Overlay {
             tile: self,
             state,
@@ -601,34 +625,25 @@ impl<
 
 /// A tile seen as a `DrawTarget` that tests window ID, depth and plane mask
 /// ([`Tile::overlay`]).
-pub struct Overlay<
-    't,
-    const N: usize,
+pub struct Overlay<'t, const N: usize, C: TileConfig> {
+    tile: &'t mut Tile<N, C>,
+    state: State,
+    /// Depth in the DDA's 16.14 format.
+    z: i32,
+}
+
+impl<const N: usize, C, F, Z, W, D, A, P> Overlay<'_, N, C>
+where
+    C: TileConfig<Format = F, Depth = Z, Wid = W, Dither = D, Aa = A, Precision = P>,
     F: PixelFormat,
     Z: DepthMode,
     W: WidMode,
     D: Dither,
     A: AaMode,
     P: Precision,
-> {
-    tile: &'t mut Tile<N, F, Z, W, D, A, P>,
-    state: State,
-    /// Depth in the DDA's 16.14 format.
-    z: i32,
-}
-
-impl<
-        const N: usize,
-        F: PixelFormat,
-        Z: DepthMode,
-        W: WidMode,
-        D: Dither,
-        A: AaMode,
-        P: Precision,
-    > Overlay<'_, N, F, Z, W, D, A, P>
 {
     /// Writes packed colour `c` at pixel `i` if it passes the tests.
-    fn put(t: &mut Tile<N, F, Z, W, D, A, P>, i: usize, c: u32, st: &State, z: i32) {
+    fn put(t: &mut Tile<N, C>, i: usize, c: u32, st: &State, z: i32) {
         if t.wid.pass(i, st.wid) && t.depth.test(i, z) {
             let mask = st.plane_mask & F::MASK_ALL;
             t.color.set(i, (t.color.get(i) & !mask) | (c & mask));
@@ -636,30 +651,30 @@ impl<
     }
 }
 
-impl<
-        const N: usize,
-        F: PixelFormat,
-        Z: DepthMode,
-        W: WidMode,
-        D: Dither,
-        A: AaMode,
-        P: Precision,
-    > Dimensions for Overlay<'_, N, F, Z, W, D, A, P>
+impl<const N: usize, C, F, Z, W, D, A, P> Dimensions for Overlay<'_, N, C>
+where
+    C: TileConfig<Format = F, Depth = Z, Wid = W, Dither = D, Aa = A, Precision = P>,
+    F: PixelFormat,
+    Z: DepthMode,
+    W: WidMode,
+    D: Dither,
+    A: AaMode,
+    P: Precision,
 {
     fn bounding_box(&self) -> Rectangle {
         self.tile.bounding_box()
     }
 }
 
-impl<
-        const N: usize,
-        F: PixelFormat,
-        Z: DepthMode,
-        W: WidMode,
-        D: Dither,
-        A: AaMode,
-        P: Precision,
-    > DrawTarget for Overlay<'_, N, F, Z, W, D, A, P>
+impl<const N: usize, C, F, Z, W, D, A, P> DrawTarget for Overlay<'_, N, C>
+where
+    C: TileConfig<Format = F, Depth = Z, Wid = W, Dither = D, Aa = A, Precision = P>,
+    F: PixelFormat,
+    Z: DepthMode,
+    W: WidMode,
+    D: Dither,
+    A: AaMode,
+    P: Precision,
 {
     type Color = F::Color;
     type Error = core::convert::Infallible;

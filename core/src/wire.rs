@@ -521,13 +521,13 @@ pub const HEADER_LEN: usize = 32;
 /// ```
 /// use tilerast::prelude::*;
 /// use tilerast::wire::{SceneHeader, HEADER_LEN};
-/// let h = SceneHeader::new::<Rgb565Format, Depth16, NoWid, Bayer4>(96, 64, (32, 16), Clear::default());
+/// let h = SceneHeader::new::<St7789Config>(96, 64, (32, 16), Clear::default());
 /// let mut buf = [0u8; HEADER_LEN];
 /// h.encode(&mut buf)?;
 /// let (back, cmds) = SceneHeader::parse(&buf)?;
 /// assert_eq!(back, h);
-/// assert!(back.check::<Rgb565Format, Depth16, NoWid, Bayer4>().is_ok());
-/// assert_eq!(back.check::<Rgb565Format, NoDepth, NoWid, Bayer4>(), Err(Error::ConfigMismatch));
+/// assert!(back.check::<St7789Config>().is_ok());
+/// assert_eq!(back.check::<Planes<Rgb565Format, NoDepth, NoWid, Bayer4>>(), Err(Error::ConfigMismatch));
 /// # Ok::<(), Error>(())
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -551,43 +551,35 @@ pub struct SceneHeader {
 }
 
 impl SceneHeader {
-    /// The header for tile types `F`, `Z`, `W`, `D`.
-    pub fn new<F, Z, W, D>(
+    /// The header for tiles of configuration `C` (its format, depth,
+    /// window-ID and dither choices).
+    pub fn new<C: crate::config::TileConfig>(
         width: u16,
         height: u16,
         tile: (u16, u16),
         clear: crate::frame::Clear,
-    ) -> Self
-    where
-        F: crate::format::PixelFormat,
-        Z: crate::fragment::DepthMode,
-        W: crate::fragment::WidMode,
-        D: crate::dither::Dither,
-    {
+    ) -> Self {
+        use crate::{dither::Dither, format::PixelFormat, fragment::DepthMode, fragment::WidMode};
+        type F<C> = <C as crate::config::TileConfig>::Format;
         let mut format = [0u8; 8];
-        let n = F::NAME.len().min(8);
-        format[..n].copy_from_slice(&F::NAME.as_bytes()[..n]);
+        let name = <F<C> as PixelFormat>::NAME;
+        let n = name.len().min(8);
+        format[..n].copy_from_slice(&name.as_bytes()[..n]);
         SceneHeader {
             width,
             height,
             tile,
             format,
-            dither_log2: D::LOG2 as u8,
-            depth_bits: Z::BITS as u8,
-            wid_bits: W::BITS as u8,
+            dither_log2: <C::Dither as Dither>::LOG2 as u8,
+            depth_bits: <C::Depth as DepthMode>::BITS as u8,
+            wid_bits: <C::Wid as WidMode>::BITS as u8,
             clear,
         }
     }
 
-    /// `Ok` when the scene was made for tile types `F`, `Z`, `W`, `D`.
-    pub fn check<F, Z, W, D>(&self) -> Result<(), Error>
-    where
-        F: crate::format::PixelFormat,
-        Z: crate::fragment::DepthMode,
-        W: crate::fragment::WidMode,
-        D: crate::dither::Dither,
-    {
-        let want = Self::new::<F, Z, W, D>(self.width, self.height, self.tile, self.clear);
+    /// `Ok` when the scene was made for tiles of configuration `C`.
+    pub fn check<C: crate::config::TileConfig>(&self) -> Result<(), Error> {
+        let want = Self::new::<C>(self.width, self.height, self.tile, self.clear);
         if want == *self {
             Ok(())
         } else {

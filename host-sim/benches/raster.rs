@@ -16,7 +16,7 @@ use tilerast::prelude::*;
 use tilerast_sim::rng::Rng;
 
 const T: u32 = 64;
-type Base<F, Z, W, D> = Tile<512, F, Z, W, D>;
+type Base<F, Z, W, D> = Tile<512, Planes<F, Z, W, D>>;
 
 fn triangles() -> Vec<Command> {
     let mut rng = Rng::new(0x1234_5678_9ABC_DEF1);

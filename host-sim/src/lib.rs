@@ -4,9 +4,11 @@
 //! with the very same `no_std` core the firmware runs, tile by tile
 //! ([`render`](mod@render)), writes PNGs ([`image`]), renders the same scene with an f64
 //! reference rasterizer ([`reference`](mod@reference)), and measures the difference
-//! ([`metrics`]).
+//! ([`metrics`]). [`PngDisplay`] is a `DrawTarget` that writes PNGs, so a
+//! firmware's own drawing code runs unchanged on the host.
 
 pub mod aa;
+pub mod display;
 pub mod image;
 pub mod mesh;
 pub mod metrics;
@@ -19,6 +21,7 @@ pub mod tradeoff;
 pub use tilerast_fw::rng;
 pub mod scene;
 
+pub use display::PngDisplay;
 pub use image::Image;
 pub use obj::Limits;
 pub use render::{render, AaKind, Config, FormatKind, Rendered};

@@ -1,5 +1,5 @@
 //! Renders a display list with the `no_std` core, choosing the tile's types
-//! (format, depth plane, window-ID plane, dither) from a runtime [`Config`]:
+//! (format, depth plane, window-ID plane, dither) from a runtime [`TileConfig`]:
 //! the host pays the monomorphization, the firmware picks one.
 
 use embedded_graphics_core::pixelcolor::Rgb888;
@@ -364,7 +364,7 @@ fn frame_and_tile<
     const G: usize,
 >(
     cfg: &Config,
-) -> Result<(Frame, Box<Tile<G, F, Z, W, D, A, P>>), Error> {
+) -> Result<(Frame, Box<Tile<G, Planes<F, Z, W, D, A, P>>>), Error> {
     let (mut tw, mut th) = cfg.tile;
     while tw as usize * th as usize > G * 8 {
         if tw >= th {
@@ -438,7 +438,7 @@ where
         image,
         raw,
         depth,
-        bits_per_pixel: Tile::<G, F, Z, W, D, A, P>::bits_per_pixel(),
+        bits_per_pixel: Tile::<G, Planes<F, Z, W, D, A, P>>::bits_per_pixel(),
         stats,
         ns_per_pixel: times.get(times.len() / 2).copied(),
     })

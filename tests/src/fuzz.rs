@@ -223,24 +223,19 @@ pub fn tile_api(data: &[u8]) -> bool {
     match b.u8() % 3 {
         0 => calls(
             &mut b,
-            &mut Tile::<64, Rgb565Format, Depth16, Wid8, Bayer4>::new(),
+            &mut Tile::<64, Planes<Rgb565Format, Depth16, Wid8, Bayer4>>::new(),
         ),
         1 => calls(
             &mut b,
-            &mut Tile::<64, Rgb888Format, Depth16, Wid8, NoDither, Ruf8>::new(),
+            &mut Tile::<64, Planes<Rgb888Format, Depth16, Wid8, NoDither, Ruf8>>::new(),
         ),
-        _ => calls(&mut b, &mut Tile::<64, BinaryFormat>::new()),
+        _ => calls(&mut b, &mut Tile::<64, Ssd1306Config>::new()),
     }
 }
 
-fn calls<const N: usize, F, Z, W, D, A>(b: &mut Bytes, t: &mut Tile<N, F, Z, W, D, A>) -> bool
+fn calls<const N: usize, C: TileConfig>(b: &mut Bytes, t: &mut Tile<N, C>) -> bool
 where
-    F: PixelFormat,
-    Z: tilerast::fragment::DepthMode,
-    W: tilerast::fragment::WidMode,
-    D: tilerast::dither::Dither,
-    A: tilerast::coverage::AaMode,
-    F::Color: embedded_graphics_core::pixelcolor::PixelColor + Default,
+    <C::Format as PixelFormat>::Color: Default,
 {
     use embedded_graphics_core::{draw_target::DrawTarget, geometry::Point, Pixel};
     let mut begun = false;
@@ -287,7 +282,7 @@ where
             }
             4 if begun => {
                 let p = Point::new(b.coord(), b.coord());
-                let _ = t.draw_iter([Pixel(p, F::Color::default())]);
+                let _ = t.draw_iter([Pixel(p, Default::default())]);
             }
             5 if begun => {
                 let a = t.area();

@@ -51,8 +51,8 @@ impl<C: PixelColor> DrawTarget for Capture<C> {
     }
 }
 
-fn gradient_tile<F: PixelFormat>() -> Tile<16, F> {
-    let mut t: Tile<16, F> = Tile::new();
+fn gradient_tile<F: PixelFormat>() -> Tile<16, Planes<F>> {
+    let mut t: Tile<16, Planes<F>> = Tile::new();
     t.begin(Rect::new(0, 0, 16, 8), &Clear::default()).unwrap();
     let v = |x: i32, y: i32, c: u8| {
         Vertex::new(Coord::from_num(x), Coord::from_num(y), 0, Rgb::new(c, c, c))

@@ -56,7 +56,7 @@ fn plane_mask_holds_with_coverage_aa() {
 #[test]
 fn tile_rect_near_i32_max_is_refused_and_the_band_edge_draws() {
     use tilerast::coverage::Ruf8;
-    let mut t: Tile<8, Rgb565Format, Depth16, Wid8, NoDither, Ruf8> = Tile::new();
+    let mut t: Tile<8, Planes<Rgb565Format, Depth16, Wid8, NoDither, Ruf8>> = Tile::new();
     for r in [
         Rect::new(i32::MAX - 3, 0, 8, 1),
         Rect::new(0, i32::MAX - 1, 8, 1),
@@ -72,7 +72,7 @@ fn tile_rect_near_i32_max_is_refused_and_the_band_edge_draws() {
     // A tile ending exactly at the guard band's last row is fine, and every
     // fill reaches it.
     let edge = Rect::new(COORD_LIMIT - 8, COORD_LIMIT - 1, 8, 1);
-    let mut t: Tile<8, Rgb565Format, Depth16, Wid8> = Tile::new();
+    let mut t: Tile<8, Planes<Rgb565Format, Depth16, Wid8>> = Tile::new();
     t.begin(edge, &Clear::default()).unwrap();
     let white = Rgb::new(255, 255, 255);
     t.draw(&Command::WidFill { rect: edge, wid: 3 }).unwrap();
@@ -93,7 +93,7 @@ fn tile_rect_near_i32_max_is_refused_and_the_band_edge_draws() {
         assert_eq!(t.depth(x, edge.y), Some(7));
         assert_eq!(t.raw(x, edge.y), Some(0xFFFF));
     }
-    let mut t: Tile<8, Rgb565Format, Depth16, Wid8, NoDither, Ruf8> = Tile::new();
+    let mut t: Tile<8, Planes<Rgb565Format, Depth16, Wid8, NoDither, Ruf8>> = Tile::new();
     t.begin(edge, &Clear::default()).unwrap();
     t.draw(&Command::Fill {
         rect: edge,

@@ -309,8 +309,9 @@ mod tiles {
             })
             .collect();
         let area = Rect::new(0, 0, 40, 32);
-        let mut a: Box<Tile<160, Rgb888Format, Depth16>> = Box::default();
-        let mut b: Box<Tile<160, Rgb888Format, Depth16, NoWid, NoDither, Ss1>> = Box::default();
+        let mut a: Box<Tile<160, Planes<Rgb888Format, Depth16>>> = Box::default();
+        type OneSample = Planes<Rgb888Format, Depth16, NoWid, NoDither, Ss1>;
+        let mut b: Box<Tile<160, OneSample>> = Box::default();
         a.begin(area, &Clear::default()).unwrap();
         b.begin(area, &Clear::default()).unwrap();
         for c in &cmds {

@@ -30,7 +30,7 @@ fn rendering_from_flash_equals_rendering_the_list() {
     let s = Scene::load(scene("demo.toml")).unwrap();
     let bytes = s.encode().unwrap();
     let (h, cmds) = SceneHeader::parse(&bytes).unwrap();
-    let mut tile: Box<Tile<2048, Rgb444Format, Depth16, Wid8, Bayer8>> = Box::default();
+    let mut tile: Box<Tile<2048, Planes<Rgb444Format, Depth16, Wid8, Bayer8>>> = Box::default();
     let frame = h.frame(h.tile).unwrap();
     let mut raw = vec![0u32; 240 * 240];
     frame
@@ -92,9 +92,11 @@ fn header_mismatch_and_garbage_are_errors() {
     let s = Scene::load(scene("ssd1306.toml")).unwrap();
     let bytes = s.encode().unwrap();
     let (h, _) = SceneHeader::parse(&bytes).unwrap();
-    assert!(h.check::<BinaryFormat, Depth16, NoWid, Bayer4>().is_ok());
+    assert!(h
+        .check::<Planes<BinaryFormat, Depth16, NoWid, Bayer4>>()
+        .is_ok());
     assert_eq!(
-        h.check::<BinaryFormat, Depth16, NoWid, Bayer8>(),
+        h.check::<Planes<BinaryFormat, Depth16, NoWid, Bayer8>>(),
         Err(Error::ConfigMismatch)
     );
     assert_eq!(decode_all(&[99, 0]), Err(Error::Malformed));
@@ -128,7 +130,7 @@ impl tilerast::embedded_graphics_core::draw_target::DrawTarget for Screen {
 fn text_overlay_through_the_tile_draw_target_changes_only_the_label() {
     let s = Scene::load(scene("demo.toml")).unwrap();
     let bytes = s.encode().unwrap();
-    let mut tile: Box<Tile<2048, Rgb444Format, Depth16, Wid8, Bayer8>> = Box::default();
+    let mut tile: Box<Tile<2048, Planes<Rgb444Format, Depth16, Wid8, Bayer8>>> = Box::default();
     let mut render = |label: Option<&str>, tile_size: (u16, u16)| {
         let mut screen = Screen(vec![Rgb444::default(); 240 * 240]);
         tilerast_fw::run_scene(&bytes, &mut tile, tile_size, label, &mut screen, &mut || 0)

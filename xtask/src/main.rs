@@ -15,8 +15,9 @@
 //! - `report`: runs the firmware under QEMU, writes `reports/targets.md`
 //!   (instructions per pixel on Cortex-M0/M4, flash, RAM, stack).
 //! - `fuzz [--seconds N] [TARGET...]`: runs every cargo-fuzz target of
-//!   `fuzz/` (or those named) for N seconds each (default 60), growing and
-//!   then minimising `fuzz/corpus/<target>`; installs `cargo-fuzz` when
+//!   `fuzz/` (or those named) for N seconds each (default 60), starting from
+//!   `fuzz/seeds/<target>` and `fuzz/corpus/<target>`, growing and then
+//!   minimising the corpus; installs `cargo-fuzz` when
 //!   missing. libFuzzer needs nightly compiler flags: on a machine with
 //!   only the stable toolchain they are enabled with `RUSTC_BOOTSTRAP=1`.
 //!   A crash leaves its input in `fuzz/artifacts/<target>/` and fails the task.

@@ -65,30 +65,27 @@ pub struct SceneRun {
 /// Error of [`run_scene`]: the raster core's, or the display's.
 pub type RunError<E> = FlushError<E>;
 
-/// Renders an encoded scene into tiles of `tile` size with `tile` buffer
-/// types `F, Z, W, D` (checked against the scene header), draws `label` (if
+/// Renders an encoded scene into tiles of `tile` size with a tile buffer of
+/// configuration `C` (checked against the scene header), draws `label` (if
 /// any) at the top left of the screen on every tile, and flushes each tile to
 /// `target`.
-pub fn run_scene<const N: usize, F, Z, W, D, T>(
+pub fn run_scene<const N: usize, C, T>(
     scene: &[u8],
-    tile_buf: &mut Tile<N, F, Z, W, D>,
+    tile_buf: &mut Tile<N, C>,
     tile: (u16, u16),
     label: Option<&str>,
     target: &mut T,
     clock: &mut impl Clock,
 ) -> Result<SceneRun, RunError<T::Error>>
 where
-    F: PixelFormat,
-    Z: DepthMode,
-    W: WidMode,
-    D: Dither,
+    C: TileConfig,
     T: DrawTarget,
-    T::Color: From<F::Color>,
+    T::Color: From<<C::Format as PixelFormat>::Color>,
 {
     let (header, cmds) = SceneHeader::parse(scene)?;
-    header.check::<F, Z, W, D>()?;
+    header.check::<C>()?;
     let frame = header.frame(tile)?;
-    let white = F::to_color(F::pack_rgb(Rgb::new(255, 255, 255)));
+    let white = C::Format::to_color(C::Format::pack_rgb(Rgb::new(255, 255, 255)));
     let mut run = SceneRun {
         pixels: header.width as u32 * header.height as u32,
         ..SceneRun::default()

@@ -12,14 +12,8 @@ use tilerast::prelude::*;
 
 /// A scene the firmware knows: its tile types and its label.
 pub trait SceneKind {
-    /// Display format.
-    type F: PixelFormat;
-    /// Depth plane.
-    type Z: DepthMode;
-    /// Window-ID plane.
-    type W: WidMode;
-    /// Dither.
-    type D: Dither;
+    /// The tile's planes.
+    type C: TileConfig;
     /// Name in the report (and of the exported `.bin`).
     const NAME: &'static str;
     /// Text drawn over every tile with `embedded-graphics`.
@@ -29,10 +23,7 @@ pub trait SceneKind {
 /// `scenes/demo.toml`: RGB444, Z, window IDs, 8x8 dither, labelled.
 pub struct Demo;
 impl SceneKind for Demo {
-    type F = Rgb444Format;
-    type Z = Depth16;
-    type W = Wid8;
-    type D = Bayer8;
+    type C = Planes<Rgb444Format, Depth16, Wid8, Bayer8>;
     const NAME: &'static str = "demo";
     const LABEL: Option<&'static str> = Some("tilerast");
 }
@@ -40,10 +31,7 @@ impl SceneKind for Demo {
 /// `scenes/ssd1306.toml`: 1 bit per pixel, Z, 4x4 dither.
 pub struct Ssd1306;
 impl SceneKind for Ssd1306 {
-    type F = BinaryFormat;
-    type Z = Depth16;
-    type W = NoWid;
-    type D = Bayer4;
+    type C = Planes<BinaryFormat, Depth16, NoWid, Bayer4>;
     const NAME: &'static str = "ssd1306";
     const LABEL: Option<&'static str> = None;
 }
@@ -56,13 +44,14 @@ pub fn scene_crc<K: SceneKind, const N: usize>(
     clock: &mut impl Clock,
 ) -> Result<(u32, SceneRun), Error>
 where
-    <K::F as PixelFormat>::Color: IntoStorage,
-    <<K::F as PixelFormat>::Color as IntoStorage>::Storage: Into<u32>,
+    <<K::C as TileConfig>::Format as PixelFormat>::Color: IntoStorage,
+    <<<K::C as TileConfig>::Format as PixelFormat>::Color as IntoStorage>::Storage: Into<u32>,
 {
     let (h, _) = tilerast::wire::SceneHeader::parse(scene)?;
-    let mut target =
-        CrcTarget::<<K::F as PixelFormat>::Color>::new(Size::new(h.width as u32, h.height as u32));
-    let mut buf: Tile<N, K::F, K::Z, K::W, K::D> = Tile::new();
+    let mut target = CrcTarget::<<<K::C as TileConfig>::Format as PixelFormat>::Color>::new(
+        Size::new(h.width as u32, h.height as u32),
+    );
+    let mut buf: Tile<N, K::C> = Tile::new();
     let run = run_scene(scene, &mut buf, tile, K::LABEL, &mut target, clock)?;
     Ok((target.crc(), run))
 }
@@ -75,8 +64,8 @@ pub fn report_scene<K: SceneKind, const N: usize>(
     clock: &mut impl Clock,
 ) -> core::fmt::Result
 where
-    <K::F as PixelFormat>::Color: IntoStorage,
-    <<K::F as PixelFormat>::Color as IntoStorage>::Storage: Into<u32>,
+    <<K::C as TileConfig>::Format as PixelFormat>::Color: IntoStorage,
+    <<<K::C as TileConfig>::Format as PixelFormat>::Color as IntoStorage>::Storage: Into<u32>,
 {
     match scene_crc::<K, N>(scene, tile, clock) {
         Ok((crc, r)) => writeln!(
@@ -98,15 +87,14 @@ enum Via {
 }
 
 #[inline(never)]
-fn bench_one<F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither>(
+fn bench_one<C: TileConfig>(
     name: &str,
     cmds: &[Command],
     via: Via,
     out: &mut impl Write,
     clock: &mut impl Clock,
 ) -> core::fmt::Result {
-    let mut tile: Tile<{ (workloads::SIDE * workloads::SIDE / 8) as usize }, F, Z, W, D> =
-        Tile::new();
+    let mut tile: Tile<{ (workloads::SIDE * workloads::SIDE / 8) as usize }, C> = Tile::new();
     let ticks = match via {
         Via::Ours => workloads::draw(&mut tile, cmds, clock),
         Via::EmbeddedGraphics => workloads::eg_primitives(&mut tile, cmds, clock),
@@ -124,70 +112,46 @@ fn bench_one<F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither>(
 /// lines through `embedded-graphics`' `Line`.
 pub fn report_benches(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt::Result {
     let tris: &[Command] = &TRIANGLE_CMDS;
-    bench_one::<Rgb565Format, NoDepth, NoWid, NoDither>(
-        "fill_rgb565",
-        &FILL_CMDS,
-        Via::Ours,
-        out,
-        clock,
-    )?;
-    bench_one::<Rgb565Format, NoDepth, NoWid, NoDither>(
-        "gouraud_rgb565",
-        tris,
-        Via::Ours,
-        out,
-        clock,
-    )?;
-    bench_one::<Rgb565Format, Depth16, NoWid, NoDither>(
+    bench_one::<Rgb565Format>("fill_rgb565", &FILL_CMDS, Via::Ours, out, clock)?;
+    bench_one::<Rgb565Format>("gouraud_rgb565", tris, Via::Ours, out, clock)?;
+    bench_one::<Planes<Rgb565Format, Depth16, NoWid, NoDither>>(
         "gouraud_z_rgb565",
         tris,
         Via::Ours,
         out,
         clock,
     )?;
-    bench_one::<Rgb565Format, Depth16, NoWid, NoDither>(
+    bench_one::<Planes<Rgb565Format, Depth16, NoWid, NoDither>>(
         "gouraud_z_edge_aa_rgb565",
         &EDGE_AA_CMDS,
         Via::Ours,
         out,
         clock,
     )?;
-    bench_one::<Rgb565Format, Depth16, Wid8, NoDither>(
+    bench_one::<Planes<Rgb565Format, Depth16, Wid8, NoDither>>(
         "gouraud_z_wid_rgb565",
         tris,
         Via::Ours,
         out,
         clock,
     )?;
-    bench_one::<Rgb565Format, Depth16, Wid8, Bayer8>(
+    bench_one::<Planes<Rgb565Format, Depth16, Wid8, Bayer8>>(
         "gouraud_z_wid_dither8_rgb565",
         tris,
         Via::Ours,
         out,
         clock,
     )?;
-    bench_one::<Rgb565Format, NoDepth, NoWid, NoDither>(
+    bench_one::<Rgb565Format>(
         "eg_triangle_rgb565",
         tris,
         Via::EmbeddedGraphics,
         out,
         clock,
     )?;
-    bench_one::<Rgb565Format, NoDepth, NoWid, NoDither>(
-        "bresenham_rgb565",
-        &LINE_CMDS,
-        Via::Ours,
-        out,
-        clock,
-    )?;
-    bench_one::<Rgb565Format, NoDepth, NoWid, NoDither>(
-        "wu_rgb565",
-        &WU_LINE_CMDS,
-        Via::Ours,
-        out,
-        clock,
-    )?;
-    bench_one::<Rgb565Format, NoDepth, NoWid, NoDither>(
+    bench_one::<Rgb565Format>("bresenham_rgb565", &LINE_CMDS, Via::Ours, out, clock)?;
+    bench_one::<Rgb565Format>("wu_rgb565", &WU_LINE_CMDS, Via::Ours, out, clock)?;
+    bench_one::<Rgb565Format>(
         "eg_line_rgb565",
         &LINE_CMDS,
         Via::EmbeddedGraphics,

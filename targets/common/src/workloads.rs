@@ -143,8 +143,8 @@ const fn fills() -> [Command; FILLS] {
 }
 
 /// Ticks to clear the tile and draw `cmds` into it.
-pub fn draw<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither>(
-    tile: &mut Tile<N, F, Z, W, D>,
+pub fn draw<const N: usize, C: TileConfig>(
+    tile: &mut Tile<N, C>,
     cmds: &[Command],
     clock: &mut impl Clock,
 ) -> Result<u64, Error> {
@@ -160,8 +160,8 @@ pub fn draw<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither>
 /// primitives onto the tile as a `DrawTarget`: each triangle as a flat
 /// `Triangle` fill (first vertex's colour), each line as a 1-pixel `Line`;
 /// vertices rounded to whole pixels.
-pub fn eg_primitives<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither>(
-    tile: &mut Tile<N, F, Z, W, D>,
+pub fn eg_primitives<const N: usize, C: TileConfig>(
+    tile: &mut Tile<N, C>,
     cmds: &[Command],
     clock: &mut impl Clock,
 ) -> Result<u64, Error> {
@@ -169,7 +169,7 @@ pub fn eg_primitives<const N: usize, F: PixelFormat, Z: DepthMode, W: WidMode, D
     tile.begin(Rect::new(0, 0, SIDE, SIDE), &Clear::default())?;
     let px =
         |(x, y): (Coord, Coord)| Point::new(x.round().to_num::<i32>(), y.round().to_num::<i32>());
-    let color = |c: Rgb| F::to_color(F::pack_rgb(c));
+    let color = |c: Rgb| C::Format::to_color(C::Format::pack_rgb(c));
     clock.lap();
     for c in cmds {
         let _ = match c {

@@ -19,8 +19,8 @@ use rp_pico::hal::{self, clocks::Clock, fugit::RateExtU32, gpio, pac, spi, Timer
 use tilerast::prelude::*;
 use {defmt_rtt as _, panic_probe as _};
 
-/// 60x40 pixels = 300 groups of 8.
-type PanelTile = Tile<300, Rgb565Format, Depth16, NoWid, Bayer4>;
+/// 60x40-pixel tiles, ST7789 preset (RGB565 + 16-bit Z + 4x4 dither).
+type PanelTile = Tile<{ groups(60, 40) }, St7789Config>;
 
 /// A floor of two Gouraud triangles and a spinning triangle that pierces it.
 fn scene(list: &mut DisplayList<4>, angle: f32) -> Result<(), Error> {
@@ -111,7 +111,8 @@ fn main() -> ! {
         .unwrap();
     defmt::info!("ST7789 ready; {} bytes per tile", PanelTile::plane_bytes());
 
-    let mut frame = Frame::new(240, 240, 60, 40).unwrap();
+    // 60x40 tiles: checked against `PanelTile` when compiling.
+    let mut frame = PanelTile::frame::<60, 40>(240, 240).unwrap();
     frame.clear = Clear {
         color: Rgb::new(8, 8, 16),
         ..Clear::default()
