@@ -6,87 +6,8 @@
 use crate::error::Error;
 use crate::format::Rgb;
 use crate::geom::Rect;
-use crate::numeric::{ColorFix, ColorStep, Coord, ZFix, ZStep, COORD_LIMIT, SUBPIXEL};
-
-/// A triangle vertex: sub-pixel position, 16-bit depth, 24-bit colour.
-///
-/// ```
-/// use tilerast::prelude::*;
-/// let v = Vertex::new(Coord::from_num(10.5), Coord::from_num(3), 1000, Rgb::new(255, 0, 0));
-/// assert!(v.validate().is_ok());
-/// let far = Vertex::new(Coord::from_num(9000), Coord::from_num(0), 0, Rgb::default());
-/// assert_eq!(far.validate(), Err(Error::CoordOutOfRange));
-/// ```
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub struct Vertex {
-    /// Column in pixels (4 sub-pixel bits); pixel centres are at `+0.5`.
-    pub x: Coord,
-    /// Row in pixels (4 sub-pixel bits), growing downwards.
-    pub y: Coord,
-    /// Depth, 0 nearest.
-    pub z: u16,
-    /// Colour at the vertex.
-    pub color: Rgb,
-}
-
-impl Vertex {
-    /// A vertex from fixed-point coordinates.
-    pub const fn new(x: Coord, y: Coord, z: u16, color: Rgb) -> Self {
-        Vertex { x, y, z, color }
-    }
-
-    /// A vertex at an `embedded-graphics` point (whole pixels: the corner
-    /// of pixel `p`; add half a pixel for its centre).
-    ///
-    /// ```
-    /// use tilerast::prelude::*;
-    /// use embedded_graphics_core::geometry::Point;
-    /// let v = Vertex::at(Point::new(3, -2), 7, Rgb::new(1, 2, 3));
-    /// assert_eq!((v.x, v.y), (Coord::from_num(3), Coord::from_num(-2)));
-    /// ```
-    pub const fn at(p: embedded_graphics_core::geometry::Point, z: u16, color: Rgb) -> Self {
-        let s = SUBPIXEL as i32;
-        Vertex::new(
-            Coord::from_bits(p.x.saturating_mul(s)),
-            Coord::from_bits(p.y.saturating_mul(s)),
-            z,
-            color,
-        )
-    }
-
-    /// A vertex from float pixel coordinates, rounded to the nearest 1/16
-    /// pixel. NaN and infinities give [`Error::NotFinite`], coordinates
-    /// outside `[-COORD_LIMIT, COORD_LIMIT)` give [`Error::CoordOutOfRange`].
-    ///
-    /// ```
-    /// use tilerast::prelude::*;
-    /// assert!(Vertex::try_from_f32(1.03, 2.0, 0, Rgb::default()).is_ok());
-    /// assert_eq!(Vertex::try_from_f32(f32::NAN, 2.0, 0, Rgb::default()), Err(Error::NotFinite));
-    /// assert_eq!(Vertex::try_from_f32(1e9, 2.0, 0, Rgb::default()), Err(Error::CoordOutOfRange));
-    /// ```
-    pub fn try_from_f32(x: f32, y: f32, z: u16, color: Rgb) -> Result<Self, Error> {
-        let c = |v: f32| -> Result<Coord, Error> {
-            if !v.is_finite() {
-                return Err(Error::NotFinite);
-            }
-            Coord::checked_from_num(v).ok_or(Error::CoordOutOfRange)
-        };
-        let v = Vertex::new(c(x)?, c(y)?, z, color);
-        v.validate()?;
-        Ok(v)
-    }
-
-    /// Checks the documented coordinate domain.
-    pub fn validate(&self) -> Result<(), Error> {
-        let lim = COORD_LIMIT as i64 * SUBPIXEL;
-        let ok = |c: Coord| (-lim..lim).contains(&(c.to_bits() as i64));
-        if ok(self.x) && ok(self.y) {
-            Ok(())
-        } else {
-            Err(Error::CoordOutOfRange)
-        }
-    }
-}
+pub use crate::geom::Vertex;
+use crate::numeric::{ColorFix, ColorStep, ZFix, ZStep, COORD_LIMIT};
 
 /// Per-command state (the seed's window ID and plane mask, and the RUF
 /// seed's object tag).
@@ -216,15 +137,15 @@ pub enum Command {
     /// A styled line (end point excluded), Z-tested like every command.
     Line {
         /// The line.
-        line: crate::line::LineCmd,
+        line: crate::raster::line::LineCmd,
         /// Window ID and plane mask.
         state: State,
     },
     /// An antialiased edge of a solid, blended after the solids are drawn
-    /// (seed 003 eq. 8; see [`crate::line::EdgeCmd`]).
+    /// (seed 003 eq. 8; see [`crate::raster::line::EdgeCmd`]).
     Edge {
         /// The edge.
-        edge: crate::line::EdgeCmd,
+        edge: crate::raster::line::EdgeCmd,
         /// Window ID and plane mask.
         state: State,
     },
@@ -279,16 +200,16 @@ impl Command {
         }
     }
 
-    /// A line in window 0 ([`crate::line::LineCmd`]).
-    pub const fn line(line: crate::line::LineCmd) -> Command {
+    /// A line in window 0 ([`crate::raster::line::LineCmd`]).
+    pub const fn line(line: crate::raster::line::LineCmd) -> Command {
         Command::Line {
             line,
             state: State::new(0),
         }
     }
 
-    /// An antialiased solid edge in window 0 ([`crate::line::EdgeCmd`]).
-    pub const fn edge(edge: crate::line::EdgeCmd) -> Command {
+    /// An antialiased solid edge in window 0 ([`crate::raster::line::EdgeCmd`]).
+    pub const fn edge(edge: crate::raster::line::EdgeCmd) -> Command {
         Command::Edge {
             edge,
             state: State::new(0),
@@ -394,7 +315,7 @@ impl Command {
     /// the cell may be inside), otherwise [`Command::bounds`].
     pub fn coverage_bounds(&self) -> Option<Rect> {
         match self {
-            Command::Triangle { v, .. } => Some(crate::setup::cell_bounds(v)),
+            Command::Triangle { v, .. } => Some(crate::geom::cell_bounds(v)),
             _ => self.bounds(),
         }
     }
@@ -402,7 +323,7 @@ impl Command {
     /// The screen pixels the command can touch, `None` when it touches none.
     pub fn bounds(&self) -> Option<Rect> {
         match self {
-            Command::Triangle { v, .. } => crate::setup::pixel_bounds(v),
+            Command::Triangle { v, .. } => crate::geom::pixel_bounds(v),
             Command::Span { span, .. } if span.len > 0 => {
                 Some(Rect::new(span.x, span.y, span.len as u32, 1))
             }
@@ -422,7 +343,7 @@ impl Command {
 #[cfg(feature = "defmt")]
 mod log {
     use super::{SpanCmd, Vertex};
-    use crate::line::{EdgeCmd, LineCmd};
+    use crate::raster::line::{EdgeCmd, LineCmd};
 
     impl defmt::Format for Vertex {
         fn format(&self, f: defmt::Formatter) {

@@ -24,13 +24,13 @@
 //! and [`Tile::frame`](crate::tile::Tile::frame) checks a frame's tile size
 //! against the type at compile time.
 
-use crate::coverage::{AaMode, NoAa};
-use crate::dither::{Bayer4, Dither, NoDither};
 use crate::format::{
     BinaryFormat, Gray8Format, PixelFormat, Rgb444Format, Rgb565Format, Rgb888Format,
 };
+use crate::fragment::dither::{Bayer4, Dither, NoDither};
 use crate::fragment::{Depth16, DepthMode, NoDepth, NoWid, WidMode};
 use crate::numeric::{FullPrecision, Precision};
+use crate::raster::coverage::{AaMode, NoAa};
 use core::marker::PhantomData;
 
 /// What a tile holds and how it writes: one type for the six choices.

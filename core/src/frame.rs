@@ -5,37 +5,15 @@
 
 use crate::command::Command;
 use crate::config::TileConfig;
-use crate::coverage::AaMode;
 use crate::error::{Error, FlushError};
-use crate::format::{PixelFormat, Rgb};
+use crate::format::PixelFormat;
 use crate::geom::Rect;
 use crate::list::DisplayList;
 use crate::numeric::MAX_SIDE;
+use crate::raster::coverage::AaMode;
+pub use crate::tile::Clear;
 use crate::tile::Tile;
-use crate::wire::Encoded;
 use embedded_graphics_core::draw_target::DrawTarget;
-
-/// Values every tile starts with.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Clear {
-    /// Background colour.
-    pub color: Rgb,
-    /// Depth (65535: farthest).
-    pub depth: u16,
-    /// Window ID.
-    pub wid: u8,
-}
-
-impl Default for Clear {
-    fn default() -> Self {
-        Clear {
-            color: Rgb::default(),
-            depth: u16::MAX,
-            wid: 0,
-        }
-    }
-}
 
 /// What rendering a frame did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -48,7 +26,7 @@ pub struct FrameStats {
 }
 
 /// Where a frame's commands come from: a slice, a [`DisplayList`], or an
-/// encoded list in flash ([`Encoded`]). Each tile replays the source.
+/// encoded list in flash ([`Encoded`](crate::wire::Encoded)). Each tile replays the source.
 pub trait CommandSource {
     /// Checks every command once per frame.
     fn validate(&self) -> Result<(), Error>;
@@ -74,15 +52,6 @@ impl<const CAP: usize> CommandSource for DisplayList<CAP> {
     fn each(&self, f: impl FnMut(&Command)) -> Result<(), Error> {
         self.iter().for_each(f);
         Ok(())
-    }
-}
-
-impl CommandSource for Encoded<'_> {
-    fn validate(&self) -> Result<(), Error> {
-        self.iter().try_for_each(|c| c.map(drop))
-    }
-    fn each(&self, mut f: impl FnMut(&Command)) -> Result<(), Error> {
-        self.iter().try_for_each(|c| c.map(|c| f(&c)))
     }
 }
 
@@ -206,5 +175,36 @@ impl Frame {
         T::Color: From<<C::Format as PixelFormat>::Color>,
     {
         self.render_with(tile, cmds, |t| t.flush(target))
+    }
+}
+
+/// A frame derived from the tile type, so the two cannot disagree.
+impl<const N: usize, C: TileConfig> Tile<N, C> {
+    /// A frame for a `width x height` screen in tiles of `TW x TH` pixels
+    /// that this tile type holds: a tile size larger than the type's
+    /// capacity does not compile (the screen size is checked at run time,
+    /// as [`Frame::new`] does).
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// type PanelTile = Tile<{ groups(60, 40) }, St7789Config>;
+    /// let frame = PanelTile::frame::<60, 40>(240, 240)?;
+    /// assert_eq!(frame.tile_size(), (60, 40));
+    /// # Ok::<(), Error>(())
+    /// ```
+    ///
+    /// ```compile_fail
+    /// use tilerast::prelude::*;
+    /// type PanelTile = Tile<{ groups(60, 40) }, St7789Config>;
+    /// let frame = PanelTile::frame::<64, 40>(240, 240); // 2560 > 2400 pixels
+    /// ```
+    pub fn frame<const TW: u16, const TH: u16>(width: u16, height: u16) -> Result<Frame, Error> {
+        const {
+            assert!(
+                TW as usize * TH as usize <= 8 * N,
+                "the frame's tiles hold more pixels than the tile type"
+            )
+        };
+        Frame::new(width, height, TW, TH)
     }
 }

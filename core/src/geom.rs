@@ -1,4 +1,10 @@
-//! Integer rectangles in screen pixels.
+//! The geometric base every stage shares: integer rectangles in screen
+//! pixels, triangle vertices in sub-pixel coordinates, and the pixel boxes
+//! of a triangle.
+
+use crate::error::Error;
+use crate::format::Rgb;
+use crate::numeric::{Coord, COORD_LIMIT, SUBPIXEL, SUBPIXEL_BITS};
 
 /// An axis-aligned rectangle of whole pixels: `x..x+w`, `y..y+h`.
 ///
@@ -84,4 +90,112 @@ impl From<Rect> for embedded_graphics_core::primitives::Rectangle {
             Size::new(r.w, r.h),
         )
     }
+}
+
+/// A triangle vertex: sub-pixel position, 16-bit depth, 24-bit colour.
+///
+/// ```
+/// use tilerast::prelude::*;
+/// let v = Vertex::new(Coord::from_num(10.5), Coord::from_num(3), 1000, Rgb::new(255, 0, 0));
+/// assert!(v.validate().is_ok());
+/// let far = Vertex::new(Coord::from_num(9000), Coord::from_num(0), 0, Rgb::default());
+/// assert_eq!(far.validate(), Err(Error::CoordOutOfRange));
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct Vertex {
+    /// Column in pixels (4 sub-pixel bits); pixel centres are at `+0.5`.
+    pub x: Coord,
+    /// Row in pixels (4 sub-pixel bits), growing downwards.
+    pub y: Coord,
+    /// Depth, 0 nearest.
+    pub z: u16,
+    /// Colour at the vertex.
+    pub color: Rgb,
+}
+
+impl Vertex {
+    /// A vertex from fixed-point coordinates.
+    pub const fn new(x: Coord, y: Coord, z: u16, color: Rgb) -> Self {
+        Vertex { x, y, z, color }
+    }
+
+    /// A vertex at an `embedded-graphics` point (whole pixels: the corner
+    /// of pixel `p`; add half a pixel for its centre).
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// use embedded_graphics_core::geometry::Point;
+    /// let v = Vertex::at(Point::new(3, -2), 7, Rgb::new(1, 2, 3));
+    /// assert_eq!((v.x, v.y), (Coord::from_num(3), Coord::from_num(-2)));
+    /// ```
+    pub const fn at(p: embedded_graphics_core::geometry::Point, z: u16, color: Rgb) -> Self {
+        let s = SUBPIXEL as i32;
+        Vertex::new(
+            Coord::from_bits(p.x.saturating_mul(s)),
+            Coord::from_bits(p.y.saturating_mul(s)),
+            z,
+            color,
+        )
+    }
+
+    /// A vertex from float pixel coordinates, rounded to the nearest 1/16
+    /// pixel. NaN and infinities give [`Error::NotFinite`], coordinates
+    /// outside `[-COORD_LIMIT, COORD_LIMIT)` give [`Error::CoordOutOfRange`].
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// assert!(Vertex::try_from_f32(1.03, 2.0, 0, Rgb::default()).is_ok());
+    /// assert_eq!(Vertex::try_from_f32(f32::NAN, 2.0, 0, Rgb::default()), Err(Error::NotFinite));
+    /// assert_eq!(Vertex::try_from_f32(1e9, 2.0, 0, Rgb::default()), Err(Error::CoordOutOfRange));
+    /// ```
+    pub fn try_from_f32(x: f32, y: f32, z: u16, color: Rgb) -> Result<Self, Error> {
+        let c = |v: f32| -> Result<Coord, Error> {
+            if !v.is_finite() {
+                return Err(Error::NotFinite);
+            }
+            Coord::checked_from_num(v).ok_or(Error::CoordOutOfRange)
+        };
+        let v = Vertex::new(c(x)?, c(y)?, z, color);
+        v.validate()?;
+        Ok(v)
+    }
+
+    /// Checks the documented coordinate domain.
+    pub fn validate(&self) -> Result<(), Error> {
+        let lim = COORD_LIMIT as i64 * SUBPIXEL;
+        let ok = |c: Coord| (-lim..lim).contains(&(c.to_bits() as i64));
+        if ok(self.x) && ok(self.y) {
+            Ok(())
+        } else {
+            Err(Error::CoordOutOfRange)
+        }
+    }
+}
+
+/// The pixels whose centres can lie inside the triangle, or `None`.
+///
+/// Validated coordinates are below 2^18 sub-pixels, so this is `i32` math,
+/// and the divisions by 16 are arithmetic shifts (floor): it runs for every
+/// command in every tile, so it must be cheap on a Cortex-M0.
+pub(crate) fn pixel_bounds(v: &[Vertex; 3]) -> Option<Rect> {
+    let [a, b, c] = v.map(|v| (v.x.to_bits(), v.y.to_bits()));
+    let half = (SUBPIXEL / 2) as i32;
+    // Pixel px has its centre at 16 px + 8: px in [ceil((min-8)/16), floor((max-8)/16)].
+    let lo = |m: i32| (m - half + (SUBPIXEL as i32 - 1)) >> SUBPIXEL_BITS;
+    let hi = |m: i32| (m - half) >> SUBPIXEL_BITS;
+    let (x0, x1) = (lo(a.0.min(b.0).min(c.0)), hi(a.0.max(b.0).max(c.0)));
+    let (y0, y1) = (lo(a.1.min(b.1).min(c.1)), hi(a.1.max(b.1).max(c.1)));
+    (x0 <= x1 && y0 <= y1).then(|| Rect::new(x0, y0, (x1 - x0 + 1) as u32, (y1 - y0 + 1) as u32))
+}
+
+/// The pixels whose cells `[16 p, 16 p + 16)` the triangle's box meets:
+/// every pixel any sample of which can be inside (coverage antialiasing).
+pub(crate) fn cell_bounds(v: &[Vertex; 3]) -> Rect {
+    let cells = |f: fn(&Vertex) -> i32| {
+        let lo = v.iter().map(f).min().unwrap_or(0) >> SUBPIXEL_BITS;
+        let hi = v.iter().map(f).max().unwrap_or(0) >> SUBPIXEL_BITS;
+        (lo, (hi - lo + 1) as u32)
+    };
+    let ((x, w), (y, h)) = (cells(|v| v.x.to_bits()), cells(|v| v.y.to_bits()));
+    Rect::new(x, y, w, h)
 }

@@ -11,18 +11,19 @@
 //!
 //! ## The pipeline, in reading order
 //!
-//! | stage | module | what it does |
+//! The source is laid out by stage (`core/src/`), and a stage imports only
+//! the stages before it. Stages marked *internal* are private: their work
+//! shows through the public types.
+//!
+//! | stage | where | what it does |
 //! | --- | --- | --- |
-//! | commands | [`command`], [`list`] | the display list: spans, triangles, lines, antialiased edges, fills |
-//! | setup | [`setup`] | vertices to exact integer edge functions and attribute planes |
-//! | bin | [`frame`] | each tile replays only the commands whose bounds touch it |
-//! | traverse | [`traverse`] | exact per-row coverage with the top-left fill rule |
-//! | span | [`span`] | the one span DDA every command type uses |
-//! | vector, AA | [`line`](mod@line) | Bresenham and two-point (Wu) lines with sub-pixel endpoints and styles; edge antialiasing of solids |
-//! | fragment tests | [`fragment`] | window ID, then Z (less-than, read-modify-write) |
-//! | dither / pack | [`dither`], [`format`] | address-bit ordered dither, display formats |
-//! | tile planes | [`tile`] | colour, depth and window-ID planes chosen by type |
-//! | flush | [`tile::Tile::flush`] | the tile to any `embedded-graphics` `DrawTarget` |
+//! | base | [`geom`], [`numeric`], [`format`], [`error`] | rectangles and vertices, the fixed-point contract, display formats and packing, errors |
+//! | commands | [`command`], [`list`] | the display list: spans, triangles, lines, antialiased edges, fills, with constructors |
+//! | setup | `setup` (internal) | vertices to exact integer edge functions and attribute planes (seed 001 §III) |
+//! | raster | `raster` (internal): `traverse`, `span`, [`line`](mod@line), [`coverage`] | exact per-row coverage with the top-left fill rule; the span DDA every primitive ends in (seed 001 §II.1); Bresenham and two-point (Wu) lines and edge antialiasing (seed 003); coverage masks and the RUF buffer (seed 000) |
+//! | fragment | [`fragment`], [`dither`] | window-ID test, Z test (less-than, read-modify-write), then one store path: address-bit ordered dither (seed 001 §II.3), pack, plane mask, store |
+//! | tile planes | [`config`], [`tile`] | colour, depth, window-ID and coverage planes chosen by one configuration type; drawing into them |
+//! | bin, frame, flush | [`frame`] | a screen cut into tiles, each replaying the commands whose bounds touch it, then flushed to any `embedded-graphics` `DrawTarget` |
 //!
 //! Beside the pipeline: [`wire`] encodes display lists as bytes (for flash),
 //! [`hash`] checks output bit for bit (a CRC32 `DrawTarget`).
@@ -71,23 +72,26 @@
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 
-pub mod command;
-pub mod config;
-pub mod coverage;
-pub mod dither;
+// The base every stage shares.
 pub mod error;
 pub mod format;
-pub mod fragment;
-pub mod frame;
 pub mod geom;
-pub mod hash;
-pub mod line;
-pub mod list;
 pub mod numeric;
-pub mod setup;
-pub mod span;
+
+// The pipeline, in order; a stage imports only the stages before it.
+pub mod command;
+pub mod list;
+mod raster;
+mod setup;
+pub use raster::{coverage, line};
+pub mod fragment;
+pub use fragment::dither;
+pub mod config;
+pub mod frame;
 pub mod tile;
-pub mod traverse;
+
+// Beside the pipeline.
+pub mod hash;
 pub mod wire;
 
 /// The `embedded-graphics-core` crate, whose `DrawTarget` tiles flush to.
@@ -100,21 +104,21 @@ pub use fixed;
 pub mod prelude {
     pub use crate::command::{Command, SpanCmd, State, Vertex};
     pub use crate::config::{groups, Planes, Ssd1306Config, St7789Config, TileConfig};
-    pub use crate::dither::{Bayer, Bayer2, Bayer4, Bayer8, Dither, NoDither};
     pub use crate::error::{Error, FlushError};
     pub use crate::format::{
         BinaryFormat, Gray8Format, PixelFormat, Rgb, Rgb444, Rgb444Format, Rgb565Format,
         Rgb888Format,
     };
+    pub use crate::fragment::dither::{Bayer, Bayer2, Bayer4, Bayer8, Dither, NoDither};
     pub use crate::fragment::{
         Depth16, Depth24, Depth32, DepthMode, NoDepth, NoWid, Wid8, WidMode,
     };
     pub use crate::frame::{Clear, CommandSource, Frame, FrameStats};
     pub use crate::geom::Rect;
-    pub use crate::line::{LineCmd, LineStyle};
     pub use crate::list::DisplayList;
     pub use crate::numeric::{
         Bits, ColorFix, ColorStep, Coord, FullPrecision, Precision, ZFix, ZStep,
     };
+    pub use crate::raster::line::{LineCmd, LineStyle};
     pub use crate::tile::Tile;
 }

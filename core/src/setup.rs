@@ -19,10 +19,10 @@
 //! `0 <= E_i <= area2`, so `E_i * inv <= 2^62` cannot overflow), and the
 //! per-pixel steps `dA/dx = ((a1 - a0) A_1 + (a2 - a0) A_2) / area2`, rounded.
 
-use crate::command::Vertex;
 use crate::format::{Lanes, PixelFormat};
 use crate::geom::Rect;
-use crate::numeric::{div_round, COLOR_FRAC, SUBPIXEL, SUBPIXEL_BITS, W_FRAC, Z_FRAC};
+use crate::geom::{pixel_bounds, Vertex};
+use crate::numeric::{div_round, COLOR_FRAC, SUBPIXEL, W_FRAC, Z_FRAC};
 
 /// One edge as a function of pixel indices: `E(px, py) = a px + b0 + step py`.
 #[derive(Debug, Clone, Copy)]
@@ -77,34 +77,6 @@ pub(crate) struct TriangleSetup<L: Lanes> {
 
 fn sub(v: &Vertex) -> (i64, i64) {
     (v.x.to_bits() as i64, v.y.to_bits() as i64)
-}
-
-/// The pixels whose centres can lie inside the triangle, or `None`.
-///
-/// Validated coordinates are below 2^18 sub-pixels, so this is `i32` math,
-/// and the divisions by 16 are arithmetic shifts (floor): it runs for every
-/// command in every tile, so it must be cheap on a Cortex-M0.
-pub(crate) fn pixel_bounds(v: &[Vertex; 3]) -> Option<Rect> {
-    let [a, b, c] = v.map(|v| (v.x.to_bits(), v.y.to_bits()));
-    let half = (SUBPIXEL / 2) as i32;
-    // Pixel px has its centre at 16 px + 8: px in [ceil((min-8)/16), floor((max-8)/16)].
-    let lo = |m: i32| (m - half + (SUBPIXEL as i32 - 1)) >> SUBPIXEL_BITS;
-    let hi = |m: i32| (m - half) >> SUBPIXEL_BITS;
-    let (x0, x1) = (lo(a.0.min(b.0).min(c.0)), hi(a.0.max(b.0).max(c.0)));
-    let (y0, y1) = (lo(a.1.min(b.1).min(c.1)), hi(a.1.max(b.1).max(c.1)));
-    (x0 <= x1 && y0 <= y1).then(|| Rect::new(x0, y0, (x1 - x0 + 1) as u32, (y1 - y0 + 1) as u32))
-}
-
-/// The pixels whose cells `[16 p, 16 p + 16)` the triangle's box meets:
-/// every pixel any sample of which can be inside (coverage antialiasing).
-pub(crate) fn cell_bounds(v: &[Vertex; 3]) -> Rect {
-    let cells = |f: fn(&Vertex) -> i32| {
-        let lo = v.iter().map(f).min().unwrap_or(0) >> SUBPIXEL_BITS;
-        let hi = v.iter().map(f).max().unwrap_or(0) >> SUBPIXEL_BITS;
-        (lo, (hi - lo + 1) as u32)
-    };
-    let ((x, w), (y, h)) = (cells(|v| v.x.to_bits()), cells(|v| v.y.to_bits()));
-    Rect::new(x, y, w, h)
 }
 
 /// The edges of a triangle oriented so that the inside is `E >= bias`

@@ -30,8 +30,8 @@ use crate::command::{Command, SpanCmd, State, Vertex};
 use crate::error::Error;
 use crate::format::Rgb;
 use crate::geom::Rect;
-use crate::line::{EdgeCmd, LineCmd, LineStyle, Side};
 use crate::numeric::{ColorFix, ColorStep, Coord, ZFix, ZStep};
+use crate::raster::line::{EdgeCmd, LineCmd, LineStyle, Side};
 
 const MASK_FLAG: u8 = 0x80;
 const TAG_FLAG: u8 = 0x40;
@@ -633,5 +633,16 @@ impl SceneHeader {
             clear,
         };
         Ok((h, Encoded(&bytes[HEADER_LEN..])))
+    }
+}
+
+/// An encoded list is a frame's command source read in place: it decodes
+/// (and validates) as it goes.
+impl crate::frame::CommandSource for Encoded<'_> {
+    fn validate(&self) -> Result<(), Error> {
+        self.iter().try_for_each(|c| c.map(drop))
+    }
+    fn each(&self, mut f: impl FnMut(&Command)) -> Result<(), Error> {
+        self.iter().try_for_each(|c| c.map(|c| f(&c)))
     }
 }

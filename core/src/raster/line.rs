@@ -9,7 +9,7 @@
 //! the start point to the end point gets one pixel: the one whose cell
 //! contains the ideal line at that centre, `floor(minor / 16)` — exactly
 //! the pixel Bresenham picks, computed with the exact quotient/remainder
-//! walk of [`crate::traverse`], so it cannot depend on the tiling. The end
+//! walk of the triangle traversal, so it cannot depend on the tiling. The end
 //! point is excluded, so a polyline draws each shared vertex once; a
 //! zero-length line draws nothing.
 //!
@@ -32,12 +32,12 @@
 //! the pixel outside the solid, by the part of it the solid covers (eq. 8).
 //! A scene without them has no such command: no plane, no pass, no cost.
 
-use crate::command::Vertex;
 use crate::error::Error;
 use crate::format::Rgb;
 use crate::geom::Rect;
+use crate::geom::Vertex;
 use crate::numeric::{div_floor, Coord, SUBPIXEL, Z_FRAC};
-use crate::traverse::FloorWalk;
+use crate::raster::traverse::FloorWalk;
 
 /// A repeating on/off pattern: 16 bits, each held for `scale` pixels.
 ///

@@ -41,11 +41,12 @@
 //! the colours that were drawn. The tests bound the error after hundreds of
 //! fragments in adversarial orders.
 
-use crate::command::Vertex;
 use crate::format::Rgb;
+use crate::geom::cell_bounds;
 use crate::geom::Rect;
+use crate::geom::Vertex;
 use crate::numeric::{div_round, SUBPIXEL};
-use crate::setup::{cell_bounds, oriented_edges};
+use crate::setup::oriented_edges;
 
 /// A set of sample positions in a pixel.
 pub trait SamplePattern: Copy + Default + core::fmt::Debug {

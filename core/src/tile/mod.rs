@@ -6,20 +6,18 @@
 //! not need are `()` — they cost no byte ([`Tile::bits_per_pixel`] reports
 //! the exact cost) and their per-pixel test is the constant `true`.
 
-use crate::command::{Command, State};
+mod draw;
+
+use crate::command::State;
 use crate::config::TileConfig;
-use crate::coverage::{AaMode, AaPlane};
-use crate::dither::Dither;
-use crate::dither::{quantize, round_bias};
 use crate::error::Error;
 use crate::format::{ColorPlane, Lanes, PixelFormat, Rgb};
+use crate::fragment::dither::Dither;
+use crate::fragment::dither::{quantize, round_bias};
 use crate::fragment::{DepthMode, DepthPlane, WidMode, WidPlane};
-use crate::frame::Clear;
 use crate::geom::Rect;
-use crate::numeric::{Precision, COLOR_FRAC, SUBPIXEL as SUBPIXEL_I64, Z_FRAC};
-use crate::setup::TriangleSetup;
-use crate::span::SpanStart;
-use crate::traverse::for_each_span;
+use crate::numeric::{Precision, COLOR_FRAC, Z_FRAC};
+use crate::raster::coverage::{AaMode, AaPlane};
 use core::marker::PhantomData;
 use embedded_graphics_core::{
     draw_target::DrawTarget,
@@ -27,6 +25,28 @@ use embedded_graphics_core::{
     primitives::Rectangle,
     Pixel,
 };
+
+/// Values every tile starts with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Clear {
+    /// Background colour.
+    pub color: Rgb,
+    /// Depth (65535: farthest).
+    pub depth: u16,
+    /// Window ID.
+    pub wid: u8,
+}
+
+impl Default for Clear {
+    fn default() -> Self {
+        Clear {
+            color: Rgb::default(),
+            depth: u16::MAX,
+            wid: 0,
+        }
+    }
+}
 
 /// A tile of up to `8 N` pixels in display format `F`, with depth plane `Z`,
 /// window-ID plane `W` and dither `D`.
@@ -80,37 +100,6 @@ where
 {
     /// Pixel capacity: `8 N`.
     pub const CAPACITY: usize = 8 * N;
-
-    /// A frame for a `width x height` screen in tiles of `TW x TH` pixels
-    /// that this tile type holds: a tile size larger than the type's
-    /// capacity does not compile (the screen size is checked at run time,
-    /// as [`Frame::new`](crate::frame::Frame::new) does).
-    ///
-    /// ```
-    /// use tilerast::prelude::*;
-    /// type PanelTile = Tile<{ groups(60, 40) }, St7789Config>;
-    /// let frame = PanelTile::frame::<60, 40>(240, 240)?;
-    /// assert_eq!(frame.tile_size(), (60, 40));
-    /// # Ok::<(), Error>(())
-    /// ```
-    ///
-    /// ```compile_fail
-    /// use tilerast::prelude::*;
-    /// type PanelTile = Tile<{ groups(60, 40) }, St7789Config>;
-    /// let frame = PanelTile::frame::<64, 40>(240, 240); // 2560 > 2400 pixels
-    /// ```
-    pub fn frame<const TW: u16, const TH: u16>(
-        width: u16,
-        height: u16,
-    ) -> Result<crate::frame::Frame, Error> {
-        const {
-            assert!(
-                TW as usize * TH as usize <= 8 * N,
-                "the frame's tiles hold more pixels than the tile type"
-            )
-        };
-        crate::frame::Frame::new(width, height, TW, TH)
-    }
 
     /// A tile with no area yet; call [`Tile::begin`]. `const`, so a tile
     /// can be a `static` (placed by the linker, not on the stack):
@@ -197,7 +186,7 @@ where
         Ok(())
     }
 
-    /// With coverage antialiasing ([`crate::coverage`]): resolves every
+    /// With coverage antialiasing ([`crate::raster::coverage`]): resolves every
     /// pixel's samples into the colour plane (dithered and packed like any
     /// fragment), sets the depth plane, if any, to the nearest sample, and
     /// returns `true` — spans and lines are then drawn over the resolved
@@ -218,262 +207,35 @@ where
             let cov = F::lanes_from_rgb(sum.map(|v| (v as i64) << (COLOR_FRAC - 8)));
             let v = cov.zip(bg, |c, b| c + ((b << COLOR_FRAC) >> 8) * free as i32 + bias);
             let (x, y) = (a.x + (i as u32 % a.w) as i32, a.y + (i as u32 / a.w) as i32);
-            let t = D::threshold(x as u32, y as u32);
-            let raw = F::pack(v.zip(F::MAX, |v, max| quantize::<D>(v, max, t)));
-            self.color.set(i, raw);
+            self.store::<false>(i, x as u32, y as u32, v, F::MASK_ALL);
             self.depth.put(i, self.aa.nearest(i));
         }
         self.resolved = true;
         true
     }
 
-    /// Validates and draws one command, clipped to the tile.
-    pub fn draw(&mut self, cmd: &Command) -> Result<(), Error> {
-        cmd.validate()?;
-        self.draw_valid(cmd);
-        Ok(())
-    }
-
-    /// Draws a command already validated.
-    ///
-    /// With coverage antialiasing a frame draws its commands twice
-    /// ([`Tile::finish`] between): solids merge into the coverage plane in
-    /// the first pass; spans, lines and every command with a partial plane
-    /// mask are drawn over the resolved pixels in the second, so the mask
-    /// keeps the bits it protects (coverage samples hold whole colours,
-    /// not planes).
-    pub(crate) fn draw_valid(&mut self, cmd: &Command) {
-        if A::SAMPLES > 0 {
-            let masked = match cmd {
-                Command::Triangle { state, .. } | Command::Fill { state, .. } => {
-                    state.plane_mask & F::MASK_ALL != F::MASK_ALL
-                }
-                _ => false,
-            };
-            match (self.resolved, cmd) {
-                (false, Command::Triangle { .. } | Command::Fill { .. }) if masked => return,
-                (true, Command::Triangle { .. } | Command::Fill { .. }) if masked => {}
-                (false, Command::Triangle { v, state }) => return self.triangle_aa(v, state),
-                (false, Command::Fill { rect, color, state }) => {
-                    // The colour plane keeps the background of the samples
-                    // no fragment covers until the tile is resolved.
-                    let (wid, c) = (state.wid, F::pack_rgb(*color));
-                    return self.for_each_pixel(rect, |t, i| {
-                        if t.wid.pass(i, wid) {
-                            t.color.set(i, c);
-                            t.aa.fill(i, *color)
-                        }
-                    });
-                }
-                (false, Command::ZFill { rect, z, state }) => {
-                    let wid = state.wid;
-                    return self.for_each_pixel(rect, |t, i| {
-                        if t.wid.pass(i, wid) {
-                            t.aa.zfill(i, *z)
-                        }
-                    });
-                }
-                (false, Command::WidFill { .. }) => {}
-                // Spans and lines go over the resolved pixels; edge
-                // antialiasing is what the coverage already does.
-                (true, Command::Span { .. } | Command::Line { .. }) => {}
-                _ => return,
-            }
-        }
-        match cmd {
-            Command::Triangle { v, state } => {
-                if let Some(t) = TriangleSetup::new::<F>(v) {
-                    self.triangle(&t, state);
-                }
-            }
-            Command::Span { span, state } => self.span_cmd(span, state),
-            Command::Line { line, state } => self.line(line, state),
-            Command::Edge { edge, state } => self.edge(edge, state),
-            Command::Fill { rect, color, state } => self.fill(rect, *color, state),
-            Command::ZFill { rect, z, state } => {
-                let wid = state.wid;
-                self.for_each_pixel(rect, |t, i| {
-                    if t.wid.pass(i, wid) {
-                        t.depth.put(i, *z)
-                    }
-                })
-            }
-            Command::WidFill { rect, wid } => self.for_each_pixel(rect, |t, i| t.wid.put(i, *wid)),
-        }
-    }
-
-    fn triangle(&mut self, t: &TriangleSetup<F::Lanes>, st: &State) {
-        let area = self.area;
-        for_each_span(&t.e, &t.bounds, &area, |py, xr, x0, x1, e1, e2| {
-            // Restart from the plane equation at xr, then advance to x0 by
-            // multiplication: exactly the values x0 - xr DDA steps give, so
-            // the output does not depend on the tiling.
-            let (c, z) = t.start(e1, e2);
-            let start = SpanStart {
-                c,
-                dc: t.gc,
-                z,
-                dz: t.gz,
-            }
-            .quantized::<P>()
-            .advanced(x0 - xr);
-            self.span(x0, py, x1 - x0, start, st);
-        });
-    }
-
-    /// A triangle through the coverage plane: one fragment per pixel of
-    /// the tile it covers any sample of ([`crate::coverage::fragments`]).
-    fn triangle_aa(&mut self, v: &[crate::command::Vertex; 3], st: &State) {
-        let a = self.area;
-        crate::coverage::fragments::<A::Pattern>(v, &a, |px, py, m, color, z| {
-            let i = ((py - a.y as i64) * a.w as i64 + (px - a.x as i64)) as usize;
-            if self.wid.pass(i, st.wid) {
-                self.aa
-                    .fragment(i, m, |k| z.at(k), Z::BITS > 0, color, st.tag);
-            }
-        });
-    }
-
-    fn line(&mut self, l: &crate::line::LineCmd, st: &State) {
-        let Some(s) = l.setup() else { return };
-        let a = self.area;
-        let (lo, hi, mlo, mhi) = if s.y_major {
-            (a.y as i64, a.y1(), a.x as i64, a.x1())
-        } else {
-            (a.x as i64, a.x1(), a.y as i64, a.y1())
-        };
-        let c = l.color;
-        let c = F::lanes_from_rgb([c.r as i64, c.g as i64, c.b as i64].map(|v| v << COLOR_FRAC));
-        let xy = |major: i64, minor: i64| {
-            if s.y_major {
-                (minor, major)
-            } else {
-                (major, minor)
-            }
-        };
-        if l.antialias {
-            s.walk_wu(lo, hi, |k, major, minor, w0, w1, z| {
-                if l.style.on(k) {
-                    for (m, w) in [(minor, w0), (minor + 1, w1)] {
-                        if w > 0 && (mlo..mhi).contains(&m) {
-                            let (x, y) = xy(major, m);
-                            self.blend(x, y, c, w, z, st);
-                        }
-                    }
-                }
-            });
-        } else {
-            let dc = c.map(|_| 0);
-            s.walk(lo, hi, |k, major, minor, z| {
-                if (mlo..mhi).contains(&minor) && l.style.on(k) {
-                    let (x, y) = xy(major, minor);
-                    self.span(x, y, 1, SpanStart { c, dc, z, dz: 0 }, st);
-                }
-            });
-        }
-    }
-
-    /// Edge antialiasing (seed 003 eq. 8): the outside pixel along the
-    /// edge gets `I_b + (I_o - I_b) d` through [`Self::blend`], with `I_o`
-    /// interpolated along the edge's major axis from the vertex colours.
-    /// The colour DDA starts at the edge's first column whatever the tile
-    /// (so tiling cannot change it) and is clamped to the two vertex colours,
-    /// which the end columns' centres may lie beyond.
-    fn edge(&mut self, e: &crate::line::EdgeCmd, st: &State) {
-        let Some(s) = e.setup() else { return };
-        let a = self.area;
-        let (lo, hi, mlo, mhi) = if s.y_major {
-            (a.y as i64, a.y1(), a.x as i64, a.x1())
-        } else {
-            (a.x as i64, a.x1(), a.y as i64, a.y1())
-        };
-        let lanes = |c: crate::format::Rgb| {
-            F::lanes_from_rgb([c.r as i64, c.g as i64, c.b as i64].map(|v| v << COLOR_FRAC))
-        };
-        let [ca, cb] = s.ends(e.v.map(|v| lanes(v.color)));
-        let (len, t0) = s.extent();
-        // Colour at the first column's centre, t0 sub-pixels from a, and its
-        // step per column: |cb - ca| < 2^24, so products stay below 2^42.
-        let c0 = ca.zip(cb, |a, b| {
-            (a as i64 + crate::numeric::div_round(t0 * (b - a) as i64, len)) as i32
-        });
-        let dc = ca.zip(cb, |a, b| {
-            crate::numeric::div_round(SUBPIXEL_I64 * (b - a) as i64, len) as i32
-        });
-        let (cmin, cmax) = (ca.zip(cb, i32::min), ca.zip(cb, i32::max));
-        let up = e.interior_up(&s);
-        s.walk_edge(up, lo, hi, |major, minor, w, k, z| {
-            if (mlo..mhi).contains(&minor) {
-                let c = c0
-                    .zip(dc, |v, d| v.wrapping_add((k as i32).wrapping_mul(d)))
-                    .zip(cmin, i32::max)
-                    .zip(cmax, i32::min);
-                let (x, y) = if s.y_major {
-                    (minor, major)
-                } else {
-                    (major, minor)
-                };
-                self.blend(x, y, c, w, z, st);
-            }
-        });
-    }
-
-    /// Blends colour `c` (output scale, 16 fraction bits) with weight `w`
-    /// (in 1/256) over the pixel at screen `(x, y)` — seed 003 eq. 7,
-    /// `C = C_bg + (C_line - C_bg) w` — after the window-ID test and a
-    /// read-only Z test (partial coverage does not claim depth), then
-    /// dither, pack and plane mask as every fragment.
-    fn blend(&mut self, x: i64, y: i64, c: F::Lanes, w: i32, z: i32, st: &State) {
-        let a = self.area;
-        let idx = ((y - a.y as i64) * a.w as i64 + (x - a.x as i64)) as usize;
-        if !self.wid.pass(idx, st.wid) || !self.depth.test(idx, z + (1 << (Z_FRAC - 1))) {
-            return;
-        }
-        let old = F::unpack(self.color.get(idx));
-        let bias = round_bias::<D>();
-        // (line - old) has at most 8 integer bits; dropping 8 of its 16
-        // fraction bits keeps the product with w <= 256 within i32.
-        let v = c.zip(old, |line, bg| {
-            let bg = bg << COLOR_FRAC;
-            bg + (((line - bg) >> 8) * w) + bias
-        });
-        let t = D::threshold(x as u32, y as u32);
+    /// The fragment store (pipeline stage 8), the one path every shaded
+    /// colour write takes — span loop, blends, coverage resolve: ordered
+    /// dither from the pixel address bits, pack to the display format,
+    /// plane mask (when `MASKED`), store. `v` is in the output channel
+    /// scale with [`COLOR_FRAC`] fraction bits, rounding bias included.
+    #[inline(always)]
+    fn store<const MASKED: bool>(&mut self, i: usize, x: u32, y: u32, v: F::Lanes, mask: u32) {
+        let t = D::threshold(x, y);
         let raw = F::pack(v.zip(F::MAX, |v, max| quantize::<D>(v, max, t)));
-        let mask = st.plane_mask & F::MASK_ALL;
-        let raw = (self.color.get(idx) & !mask) | (raw & mask);
-        self.color.set(idx, raw);
+        self.put_packed::<MASKED>(i, raw, mask);
     }
 
-    fn fill(&mut self, rect: &Rect, color: Rgb, st: &State) {
-        let c = F::pack_rgb(color);
-        let mask = st.plane_mask & F::MASK_ALL;
-        let wid = st.wid;
-        self.for_each_pixel(rect, |t, i| {
-            if t.wid.pass(i, wid) {
-                let v = if mask == F::MASK_ALL {
-                    c
-                } else {
-                    (t.color.get(i) & !mask) | (c & mask)
-                };
-                t.color.set(i, v);
-            }
-        });
-    }
-
-    /// Calls `f(self, index)` for each tile pixel inside `rect`.
-    #[inline]
-    fn for_each_pixel(&mut self, rect: &Rect, mut f: impl FnMut(&mut Self, usize)) {
-        let Some(r) = rect.intersect(&self.area) else {
-            return;
+    /// The end of [`Self::store`] for an already packed value (flat fills
+    /// and overlays, which have nothing to dither): plane mask, store.
+    #[inline(always)]
+    fn put_packed<const MASKED: bool>(&mut self, i: usize, raw: u32, mask: u32) {
+        let raw = if MASKED {
+            (self.color.get(i) & !mask) | (raw & mask)
+        } else {
+            raw
         };
-        let a = self.area;
-        for y in 0..r.h {
-            let row = ((r.y - a.y) as u32 + y) * a.w + (r.x - a.x) as u32;
-            let row = row as usize;
-            for i in row..row + r.w as usize {
-                f(self, i);
-            }
-        }
+        self.color.set(i, raw);
     }
 
     fn index(&self, x: i32, y: i32) -> Option<usize> {
@@ -645,8 +407,7 @@ where
     /// Writes packed colour `c` at pixel `i` if it passes the tests.
     fn put(t: &mut Tile<N, C>, i: usize, c: u32, st: &State, z: i32) {
         if t.wid.pass(i, st.wid) && t.depth.test(i, z) {
-            let mask = st.plane_mask & F::MASK_ALL;
-            t.color.set(i, (t.color.get(i) & !mask) | (c & mask));
+            t.put_packed::<true>(i, c, st.plane_mask & F::MASK_ALL);
         }
     }
 }

@@ -14,6 +14,8 @@
 //! surfaces; they cost 1 and 2 more bytes a pixel (`tilerast-sim tradeoff`
 //! measures what that buys).
 
+pub mod dither;
+
 use crate::format::{Cell, ColorPlane, Plane};
 use core::marker::PhantomData;
 
