@@ -47,7 +47,7 @@
 //! **Fewer bits.** A tile with [`Precision`] `Bits<C, Z>` rounds span starts
 //! and steps to `C` / `Z` fraction bits: the drift bound becomes `k`
 //! half-units of the coarser bit, `k / 2^(C+1)` LSB of colour after `k`
-//! pixels. `tilerast-sim tradeoff` measures what that costs in error
+//! pixels. `tilerast-lab tradeoff` measures what that costs in error
 //! (nothing is saved in cycles on a 32-bit core). Depth planes with
 //! fraction bits ([`Depth24`](crate::fragment::Depth24),
 //! [`Depth32`](crate::fragment::Depth32)) keep 8 or 14 of the DDA's 14
@@ -96,7 +96,7 @@ pub const Z_FRAC: u32 = 14;
 /// every span's start and step to nearest at `COLOR_BITS` (of at most
 /// [`COLOR_FRAC`]) and `Z_BITS` (of at most [`Z_FRAC`]) fraction bits, which
 /// is exactly the arithmetic of a narrower datapath. It exists to *measure*
-/// what each bit buys (`tilerast-sim tradeoff`), the way the seed's designers
+/// what each bit buys (`tilerast-lab tradeoff`), the way the seed's designers
 /// sized REjr's interpolators in their C model; the full widths cost nothing
 /// extra on a 32-bit core.
 ///

@@ -7,7 +7,6 @@
 //! ([`metrics`]). [`PngDisplay`] is a `DrawTarget` that writes PNGs, so a
 //! firmware's own drawing code runs unchanged on the host.
 
-pub mod aa;
 pub mod display;
 pub mod image;
 pub mod mesh;
@@ -15,8 +14,6 @@ pub mod metrics;
 pub mod obj;
 pub mod reference;
 pub mod render;
-pub mod ruf;
-pub mod tradeoff;
 /// The deterministic PRNG, shared with the firmware workloads.
 pub use tilerast_fw::rng;
 pub mod scene;

@@ -211,11 +211,11 @@ fn one_sample_supersampling_is_the_pixel_centre_reference() {
 
 #[test]
 fn antialiasing_brings_renders_closer_to_the_ideal() {
-    // The report's measurements (`tilerast-sim aa-report`), as properties:
+    // The report's measurements (`tilerast-lab aa-report`), as properties:
     // against the 16x16 supersampled ideal, two-point lines beat Bresenham
     // by far, Bresenham with sub-pixel end points beats integer end points,
     // and edge antialiasing lowers the error of solids.
-    let groups = tilerast_sim::aa::measure(&[]);
+    let groups = tilerast_lab::aa::measure(&[]);
     let err = |g: usize, mode: &str| {
         let m = groups[g].1.iter().find(|m| m.mode.contains(mode)).unwrap();
         m.diff.mse_per_pixel

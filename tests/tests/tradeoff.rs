@@ -1,10 +1,10 @@
-//! The speed-against-accuracy sweep (`tilerast-sim tradeoff`) on its
+//! The speed-against-accuracy sweep (`tilerast-lab tradeoff`) on its
 //! procedural scenes, quickly (2x2 ideal, one timed run): the report's
 //! claims hold, and the precision knob keeps the pipeline's guarantees.
 
 use tilerast::prelude::*;
+use tilerast_lab::tradeoff::{self, Family, Options, Point};
 use tilerast_sim::render::{render_as, SIM_GROUPS};
-use tilerast_sim::tradeoff::{self, Family, Options, Point};
 use tilerast_sim::FormatKind;
 use tilerast_tests::{config, random_command, Rng};
 

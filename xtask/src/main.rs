@@ -261,7 +261,7 @@ fn test() -> Result<(), String> {
 fn bench() -> Result<(), String> {
     run(
         "cargo",
-        &["bench", "-p", "tilerast-sim", "--bench", "raster"],
+        &["bench", "-p", "tilerast-lab", "--bench", "raster"],
     )?;
     let root = std::path::Path::new("target/criterion");
     let mut rows = vec![];
@@ -322,12 +322,12 @@ fn bench() -> Result<(), String> {
     println!("{md}");
     // The quality axis of the same modes: error against the ideal, and
     // the RUF-buffer paper's tables (seed 000).
-    let sim = |args: &[&str]| {
-        let mut all = vec!["run", "--release", "-q", "-p", "tilerast-sim", "--"];
+    let lab = |args: &[&str]| {
+        let mut all = vec!["run", "--release", "-q", "-p", "tilerast-lab", "--"];
         all.extend_from_slice(args);
         run("cargo", &all)
     };
-    sim(&[
+    lab(&[
         "aa-report",
         "scenes/edges.toml",
         "scenes/demo.toml",
@@ -336,9 +336,9 @@ fn bench() -> Result<(), String> {
         "--image",
         "reports/aa.png",
     ])?;
-    sim(&["ruf-report"])?;
+    lab(&["ruf-report"])?;
     // Every knob on both axes (`reports/tradeoff.{md,csv,png}`).
-    sim(&["tradeoff"])
+    lab(&["tradeoff"])
 }
 
 /// Runs the firmware under QEMU and writes `reports/targets.md`.

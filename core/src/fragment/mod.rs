@@ -11,7 +11,7 @@
 //! so surfaces closer than one unit tie, and the first drawn wins.
 //! [`Depth24`] and [`Depth32`] keep 8 and 14 fraction bits of the
 //! interpolated value as well, for scenes with close or intersecting
-//! surfaces; they cost 1 and 2 more bytes a pixel (`tilerast-sim tradeoff`
+//! surfaces; they cost 1 and 2 more bytes a pixel (`tilerast-lab tradeoff`
 //! measures what that buys).
 
 pub mod dither;

@@ -10,14 +10,14 @@
 //! (`host-sim/benches/raster.rs`) on the host and QEMU instruction counts on
 //! the chips (`targets/`).
 
-use crate::image::Image;
-use crate::metrics::{compare, Diff};
-use crate::reference;
-use crate::render::{render, Config, FormatKind};
-use crate::rng::Rng;
-use crate::scene::Scene;
 use tilerast::line::EdgeCmd;
 use tilerast::prelude::*;
+use tilerast_sim::image::Image;
+use tilerast_sim::metrics::{compare, Diff};
+use tilerast_sim::reference;
+use tilerast_sim::render::{render, Config, FormatKind};
+use tilerast_sim::rng::Rng;
+use tilerast_sim::scene::Scene;
 
 /// Supersampling of the ideal: 16x16 samples per pixel.
 pub const IDEAL_SAMPLES: u32 = 16;
@@ -45,7 +45,7 @@ fn config(w: u16, h: u16) -> Config {
         depth: false,
         wid: false,
         clear: Clear::default(),
-        aa: crate::render::AaKind::None,
+        aa: tilerast_sim::render::AaKind::None,
     }
 }
 

@@ -1,0 +1,43 @@
+//! Charts with `plotters`, drawn into the simulator's [`Image`] (so they
+//! are written by the same PNG code as every render). Text uses the
+//! DejaVu Sans font shipped in `lab/assets/` (its licence beside it), so
+//! no system font library is needed on any machine.
+
+use plotters::prelude::*;
+use std::sync::Once;
+use tilerast_sim::Image;
+
+static FONT: Once = Once::new();
+
+/// The font family name the charts use.
+pub const SANS: &str = "sans-serif";
+
+/// A `w x h` chart drawn by `draw` on a white area.
+pub fn plot(
+    w: u32,
+    h: u32,
+    draw: impl FnOnce(&DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>) -> Result<(), String>,
+) -> Result<Image, String> {
+    FONT.call_once(|| {
+        let bytes: &'static [u8] = include_bytes!("../assets/DejaVuSans.ttf");
+        plotters::style::register_font(SANS, FontStyle::Normal, bytes)
+            .unwrap_or_else(|_| panic!("the shipped font parses"));
+    });
+    let mut buf = vec![0u8; (w * h * 3) as usize];
+    {
+        let area = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        area.fill(&WHITE).map_err(|e| e.to_string())?;
+        draw(&area)?;
+        area.present().map_err(|e| e.to_string())?;
+    }
+    let mut img = Image::new(w, h);
+    for (p, c) in img.pixels.iter_mut().zip(buf.chunks_exact(3)) {
+        *p = [c[0], c[1], c[2]];
+    }
+    Ok(img)
+}
+
+/// The plotters error as text.
+pub fn err<E: std::fmt::Display>(e: E) -> String {
+    e.to_string()
+}

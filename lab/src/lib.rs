@@ -1,0 +1,20 @@
+//! # tilerast-lab
+//!
+//! The research side of tilerast, kept out of the simulator's dependency
+//! tree: reproductions of the seed papers' measurements and the sweeps that
+//! put every knob on both axes, error and cost.
+//!
+//! - [`aa`]: every antialiasing mode and its peers (`embedded-graphics`,
+//!   `tiny-skia`) against the 16x16 supersampled ideal (seeds 003, 000);
+//! - [`ruf`]: the RUF-buffer paper's Tables 1-4 on its models (seed 000);
+//! - [`tradeoff`]: the speed-against-accuracy sweep of every knob, with
+//!   Pareto fronts.
+//!
+//! `tilerast-lab aa-report | ruf-report | tradeoff` writes the reports
+//! into `reports/`; `cargo xtask bench` runs them all after the criterion
+//! benchmark (`benches/raster.rs`).
+
+pub mod aa;
+pub mod chart;
+pub mod ruf;
+pub mod tradeoff;
