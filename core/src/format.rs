@@ -60,160 +60,6 @@ impl From<Rgb> for Rgb888 {
     }
 }
 
-/// The interpolated channels of one fragment: `[i32; 3]` for RGB formats,
-/// `[i32; 1]` for grey and binary. Each lane is a fixed-point value in the
-/// output channel scale with [`COLOR_FRAC`] fraction bits.
-pub trait Lanes: Copy + core::fmt::Debug {
-    /// Number of lanes.
-    const LEN: usize;
-    /// Builds lanes from a function of the lane index.
-    fn from_fn(f: impl FnMut(usize) -> i32) -> Self;
-    /// Lane `i`.
-    fn lane(&self, i: usize) -> i32;
-    /// Lane-wise map.
-    #[inline(always)]
-    fn map(self, mut f: impl FnMut(i32) -> i32) -> Self {
-        Self::from_fn(|i| f(self.lane(i)))
-    }
-    /// Lane-wise combination.
-    #[inline(always)]
-    fn zip(self, o: Self, mut f: impl FnMut(i32, i32) -> i32) -> Self {
-        Self::from_fn(|i| f(self.lane(i), o.lane(i)))
-    }
-}
-
-impl<const C: usize> Lanes for [i32; C] {
-    const LEN: usize = C;
-    #[inline(always)]
-    fn from_fn(f: impl FnMut(usize) -> i32) -> Self {
-        core::array::from_fn(f)
-    }
-    #[inline(always)]
-    fn lane(&self, i: usize) -> i32 {
-        self[i]
-    }
-}
-
-/// Storage of one plane for `8 N` pixels; values travel as `u32`.
-pub trait ColorPlane: Sized {
-    /// A plane of zeros (a constant, so tiles can be built in `const`
-    /// context and live in a `static`).
-    const NEW: Self;
-    /// The value at pixel index `i` (`i < 8 N`).
-    fn get(&self, i: usize) -> u32;
-    /// Stores `v` (already within the plane's bit width) at pixel index `i`.
-    fn set(&mut self, i: usize, v: u32);
-}
-
-/// One element of a [`Plane`].
-pub trait Cell: Copy + Default {
-    /// Zero.
-    const ZERO: Self;
-    /// Widens to `u32`.
-    fn to_u32(self) -> u32;
-    /// Narrows from `u32` (the value fits by construction).
-    fn from_u32(v: u32) -> Self;
-}
-
-impl Cell for u8 {
-    const ZERO: Self = 0;
-    #[inline(always)]
-    fn to_u32(self) -> u32 {
-        self as u32
-    }
-    #[inline(always)]
-    fn from_u32(v: u32) -> Self {
-        v as u8
-    }
-}
-
-impl Cell for u16 {
-    const ZERO: Self = 0;
-    #[inline(always)]
-    fn to_u32(self) -> u32 {
-        self as u32
-    }
-    #[inline(always)]
-    fn from_u32(v: u32) -> Self {
-        v as u16
-    }
-}
-
-impl Cell for u32 {
-    const ZERO: Self = 0;
-    #[inline(always)]
-    fn to_u32(self) -> u32 {
-        self
-    }
-    #[inline(always)]
-    fn from_u32(v: u32) -> Self {
-        v
-    }
-}
-
-/// Three bytes, `0xRRGGBB` order: RGB888 without padding.
-impl Cell for [u8; 3] {
-    const ZERO: Self = [0; 3];
-    #[inline(always)]
-    fn to_u32(self) -> u32 {
-        (self[0] as u32) << 16 | (self[1] as u32) << 8 | self[2] as u32
-    }
-    #[inline(always)]
-    fn from_u32(v: u32) -> Self {
-        [(v >> 16) as u8, (v >> 8) as u8, v as u8]
-    }
-}
-
-/// A plane of `8 N` cells of type `T`, stored as `N` groups of 8 so that the
-/// 1-bit format can pack a group into one byte with the same `N`.
-///
-/// ```
-/// use tilerast::format::{ColorPlane, Plane};
-/// let mut p: Plane<u16, 2> = Plane::NEW;
-/// p.set(15, 0xBEEF);
-/// assert_eq!(p.get(15), 0xBEEF);
-/// assert_eq!(core::mem::size_of::<Plane<u16, 2>>(), 32);
-/// ```
-#[derive(Clone)]
-pub struct Plane<T, const N: usize>(pub [[T; 8]; N]);
-
-impl<T: Cell, const N: usize> ColorPlane for Plane<T, N> {
-    const NEW: Self = Plane([[T::ZERO; 8]; N]);
-    #[inline(always)]
-    fn get(&self, i: usize) -> u32 {
-        self.0.as_flattened()[i].to_u32()
-    }
-    #[inline(always)]
-    fn set(&mut self, i: usize, v: u32) {
-        self.0.as_flattened_mut()[i] = T::from_u32(v);
-    }
-}
-
-/// A 1-bit plane: 8 pixels per byte, bit `i % 8` of byte `i / 8`.
-///
-/// ```
-/// use tilerast::format::{BitPlane, ColorPlane};
-/// let mut p: BitPlane<4> = BitPlane::NEW; // 32 pixels in 4 bytes
-/// p.set(9, 1);
-/// assert_eq!((p.get(8), p.get(9)), (0, 1));
-/// assert_eq!(core::mem::size_of::<BitPlane<4>>(), 4);
-/// ```
-#[derive(Clone)]
-pub struct BitPlane<const N: usize>(pub [u8; N]);
-
-impl<const N: usize> ColorPlane for BitPlane<N> {
-    const NEW: Self = BitPlane([0; N]);
-    #[inline(always)]
-    fn get(&self, i: usize) -> u32 {
-        (self.0[i >> 3] >> (i & 7)) as u32 & 1
-    }
-    #[inline(always)]
-    fn set(&mut self, i: usize, v: u32) {
-        let b = &mut self.0[i >> 3];
-        *b = (*b & !(1 << (i & 7))) | (((v & 1) as u8) << (i & 7));
-    }
-}
-
 /// A display format: channel count and depth, packing, plane storage and the
 /// `embedded-graphics` colour it flushes as.
 pub trait PixelFormat: 'static {
@@ -514,3 +360,170 @@ mod tests {
         assert_eq!(Rgb888::from(c), Rgb888::new(255, 0, 0));
     }
 }
+
+/// Colour-plane storage and the lanes of a fragment: the tile's internals.
+/// Public only with the `unstable` feature (the research crate and the
+/// tests use them); no stability promise.
+mod planes {
+    #![allow(unused_imports)]
+    use super::*;
+
+    /// The interpolated channels of one fragment: `[i32; 3]` for RGB formats,
+    /// `[i32; 1]` for grey and binary. Each lane is a fixed-point value in the
+    /// output channel scale with [`COLOR_FRAC`] fraction bits.
+    pub trait Lanes: Copy + core::fmt::Debug {
+        /// Number of lanes.
+        const LEN: usize;
+        /// Builds lanes from a function of the lane index.
+        fn from_fn(f: impl FnMut(usize) -> i32) -> Self;
+        /// Lane `i`.
+        fn lane(&self, i: usize) -> i32;
+        /// Lane-wise map.
+        #[inline(always)]
+        fn map(self, mut f: impl FnMut(i32) -> i32) -> Self {
+            Self::from_fn(|i| f(self.lane(i)))
+        }
+        /// Lane-wise combination.
+        #[inline(always)]
+        fn zip(self, o: Self, mut f: impl FnMut(i32, i32) -> i32) -> Self {
+            Self::from_fn(|i| f(self.lane(i), o.lane(i)))
+        }
+    }
+
+    impl<const C: usize> Lanes for [i32; C] {
+        const LEN: usize = C;
+        #[inline(always)]
+        fn from_fn(f: impl FnMut(usize) -> i32) -> Self {
+            core::array::from_fn(f)
+        }
+        #[inline(always)]
+        fn lane(&self, i: usize) -> i32 {
+            self[i]
+        }
+    }
+
+    /// Storage of one plane for `8 N` pixels; values travel as `u32`.
+    pub trait ColorPlane: Sized {
+        /// A plane of zeros (a constant, so tiles can be built in `const`
+        /// context and live in a `static`).
+        const NEW: Self;
+        /// The value at pixel index `i` (`i < 8 N`).
+        fn get(&self, i: usize) -> u32;
+        /// Stores `v` (already within the plane's bit width) at pixel index `i`.
+        fn set(&mut self, i: usize, v: u32);
+    }
+
+    /// One element of a [`Plane`].
+    pub trait Cell: Copy + Default {
+        /// Zero.
+        const ZERO: Self;
+        /// Widens to `u32`.
+        fn to_u32(self) -> u32;
+        /// Narrows from `u32` (the value fits by construction).
+        fn from_u32(v: u32) -> Self;
+    }
+
+    impl Cell for u8 {
+        const ZERO: Self = 0;
+        #[inline(always)]
+        fn to_u32(self) -> u32 {
+            self as u32
+        }
+        #[inline(always)]
+        fn from_u32(v: u32) -> Self {
+            v as u8
+        }
+    }
+
+    impl Cell for u16 {
+        const ZERO: Self = 0;
+        #[inline(always)]
+        fn to_u32(self) -> u32 {
+            self as u32
+        }
+        #[inline(always)]
+        fn from_u32(v: u32) -> Self {
+            v as u16
+        }
+    }
+
+    impl Cell for u32 {
+        const ZERO: Self = 0;
+        #[inline(always)]
+        fn to_u32(self) -> u32 {
+            self
+        }
+        #[inline(always)]
+        fn from_u32(v: u32) -> Self {
+            v
+        }
+    }
+
+    /// Three bytes, `0xRRGGBB` order: RGB888 without padding.
+    impl Cell for [u8; 3] {
+        const ZERO: Self = [0; 3];
+        #[inline(always)]
+        fn to_u32(self) -> u32 {
+            (self[0] as u32) << 16 | (self[1] as u32) << 8 | self[2] as u32
+        }
+        #[inline(always)]
+        fn from_u32(v: u32) -> Self {
+            [(v >> 16) as u8, (v >> 8) as u8, v as u8]
+        }
+    }
+
+    /// A plane of `8 N` cells of type `T`, stored as `N` groups of 8 so that the
+    /// 1-bit format can pack a group into one byte with the same `N`.
+    ///
+    /// ```
+    /// use tilerast::format::{ColorPlane, Plane};
+    /// let mut p: Plane<u16, 2> = Plane::NEW;
+    /// p.set(15, 0xBEEF);
+    /// assert_eq!(p.get(15), 0xBEEF);
+    /// assert_eq!(core::mem::size_of::<Plane<u16, 2>>(), 32);
+    /// ```
+    #[derive(Clone)]
+    pub struct Plane<T, const N: usize>(pub [[T; 8]; N]);
+
+    impl<T: Cell, const N: usize> ColorPlane for Plane<T, N> {
+        const NEW: Self = Plane([[T::ZERO; 8]; N]);
+        #[inline(always)]
+        fn get(&self, i: usize) -> u32 {
+            self.0.as_flattened()[i].to_u32()
+        }
+        #[inline(always)]
+        fn set(&mut self, i: usize, v: u32) {
+            self.0.as_flattened_mut()[i] = T::from_u32(v);
+        }
+    }
+
+    /// A 1-bit plane: 8 pixels per byte, bit `i % 8` of byte `i / 8`.
+    ///
+    /// ```
+    /// use tilerast::format::{BitPlane, ColorPlane};
+    /// let mut p: BitPlane<4> = BitPlane::NEW; // 32 pixels in 4 bytes
+    /// p.set(9, 1);
+    /// assert_eq!((p.get(8), p.get(9)), (0, 1));
+    /// assert_eq!(core::mem::size_of::<BitPlane<4>>(), 4);
+    /// ```
+    #[derive(Clone)]
+    pub struct BitPlane<const N: usize>(pub [u8; N]);
+
+    impl<const N: usize> ColorPlane for BitPlane<N> {
+        const NEW: Self = BitPlane([0; N]);
+        #[inline(always)]
+        fn get(&self, i: usize) -> u32 {
+            (self.0[i >> 3] >> (i & 7)) as u32 & 1
+        }
+        #[inline(always)]
+        fn set(&mut self, i: usize, v: u32) {
+            let b = &mut self.0[i >> 3];
+            *b = (*b & !(1 << (i & 7))) | (((v & 1) as u8) << (i & 7));
+        }
+    }
+}
+
+#[cfg(feature = "unstable")]
+pub use planes::{BitPlane, Cell, ColorPlane, Lanes, Plane};
+#[cfg(not(feature = "unstable"))]
+pub(crate) use planes::{BitPlane, Cell, ColorPlane, Lanes, Plane};

@@ -66,28 +66,6 @@ pub fn threshold(l: u32, x: u32, y: u32) -> u32 {
     d
 }
 
-/// Quantizes one lane (output scale, [`COLOR_FRAC`](crate::numeric::COLOR_FRAC)
-/// fraction bits, already carrying the `+0.5` bias of [`round_bias`]) to an
-/// integer in `0..=max`, dithered with threshold `t`.
-#[inline(always)]
-pub fn quantize<D: Dither>(v: i32, max: i32, t: u32) -> i32 {
-    use crate::numeric::COLOR_FRAC;
-    let int = v >> COLOR_FRAC;
-    if D::LOG2 == 0 {
-        int.clamp(0, max)
-    } else {
-        let bits = 2 * D::LOG2;
-        let frac = ((v >> (COLOR_FRAC - bits)) as u32) & ((1 << bits) - 1);
-        (int + (frac > t) as i32).clamp(0, max)
-    }
-}
-
-/// The bias added once at span start so that truncation in [`quantize`]
-/// rounds to nearest: half a unit of the last fraction bit it looks at.
-pub const fn round_bias<D: Dither>() -> i32 {
-    1 << (crate::numeric::COLOR_FRAC - 2 * D::LOG2 - 1)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -174,3 +152,38 @@ mod tests {
         }
     }
 }
+
+/// The quantizer every fragment store uses.
+/// Public only with the `unstable` feature (the research crate and the
+/// tests use them); no stability promise.
+mod quant {
+    #![allow(unused_imports)]
+    use super::*;
+
+    /// Quantizes one lane (output scale, [`COLOR_FRAC`](crate::numeric::COLOR_FRAC)
+    /// fraction bits, already carrying the `+0.5` bias of [`round_bias`]) to an
+    /// integer in `0..=max`, dithered with threshold `t`.
+    #[inline(always)]
+    pub fn quantize<D: Dither>(v: i32, max: i32, t: u32) -> i32 {
+        use crate::numeric::COLOR_FRAC;
+        let int = v >> COLOR_FRAC;
+        if D::LOG2 == 0 {
+            int.clamp(0, max)
+        } else {
+            let bits = 2 * D::LOG2;
+            let frac = ((v >> (COLOR_FRAC - bits)) as u32) & ((1 << bits) - 1);
+            (int + (frac > t) as i32).clamp(0, max)
+        }
+    }
+
+    /// The bias added once at span start so that truncation in [`quantize`]
+    /// rounds to nearest: half a unit of the last fraction bit it looks at.
+    pub const fn round_bias<D: Dither>() -> i32 {
+        1 << (crate::numeric::COLOR_FRAC - 2 * D::LOG2 - 1)
+    }
+}
+
+#[cfg(feature = "unstable")]
+pub use quant::{quantize, round_bias};
+#[cfg(not(feature = "unstable"))]
+pub(crate) use quant::{quantize, round_bias};

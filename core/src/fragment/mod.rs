@@ -19,36 +19,6 @@ pub mod dither;
 use crate::format::{Cell, ColorPlane, Plane};
 use core::marker::PhantomData;
 
-/// Depth-plane storage.
-pub trait DepthPlane: Sized {
-    /// A new plane (contents are set by the tile's clear).
-    const NEW: Self;
-    /// Sets pixel `i` to the integer depth `z` (clears, Z fills, resolved
-    /// coverage).
-    fn put(&mut self, i: usize, z: u16);
-    /// Reads pixel `i`'s integer depth, rounded down (65535 when there is
-    /// no plane).
-    fn read(&self, i: usize) -> u16;
-    /// The Z test of an interpolated depth `z` (16.14, rounding bias of
-    /// half a unit included): passes and stores when `z` is less than the
-    /// stored value at the plane's precision.
-    fn test_and_set(&mut self, i: usize, z: i32) -> bool;
-    /// The Z test without the write (partial-coverage fragments).
-    fn test(&self, i: usize, z: i32) -> bool;
-}
-
-/// Window-ID plane storage.
-pub trait WidPlane: Sized {
-    /// A new plane.
-    const NEW: Self;
-    /// Sets pixel `i` to `id`.
-    fn put(&mut self, i: usize, id: u8);
-    /// Reads pixel `i` (0 when there is no plane).
-    fn read(&self, i: usize) -> u8;
-    /// The window-ID test.
-    fn pass(&self, i: usize, id: u8) -> bool;
-}
-
 /// Whether a tile has a depth plane, chosen by type.
 pub trait DepthMode: 'static {
     /// Storage for `8 N` pixels.
@@ -109,92 +79,135 @@ impl WidMode for NoWid {
     const BITS: u32 = 0;
 }
 
-/// Storage of a [`DepthBits`] plane: depth in 16.`FRAC` in cells `T`.
-pub struct ZPlane<T, const FRAC: u32, const N: usize>(Plane<T, N>);
+/// Depth- and window-ID-plane storage: the tile's internals.
+/// Public only with the `unstable` feature (the research crate and the
+/// tests use them); no stability promise.
+mod planes {
+    #![allow(unused_imports)]
+    use super::*;
 
-impl<T: Cell, const FRAC: u32, const N: usize> ZPlane<T, FRAC, N> {
-    /// Largest stored value: 65535 with every fraction bit set.
-    const MAX: u32 = (0x1_0000 << FRAC) - 1;
+    /// Depth-plane storage.
+    pub trait DepthPlane: Sized {
+        /// A new plane (contents are set by the tile's clear).
+        const NEW: Self;
+        /// Sets pixel `i` to the integer depth `z` (clears, Z fills, resolved
+        /// coverage).
+        fn put(&mut self, i: usize, z: u16);
+        /// Reads pixel `i`'s integer depth, rounded down (65535 when there is
+        /// no plane).
+        fn read(&self, i: usize) -> u16;
+        /// The Z test of an interpolated depth `z` (16.14, rounding bias of
+        /// half a unit included): passes and stores when `z` is less than the
+        /// stored value at the plane's precision.
+        fn test_and_set(&mut self, i: usize, z: i32) -> bool;
+        /// The Z test without the write (partial-coverage fragments).
+        fn test(&self, i: usize, z: i32) -> bool;
+    }
 
-    /// An interpolated 16.14 depth at the plane's precision. The DDA keeps
-    /// `z <= 2^30 + 2^13` plus its drift; clamp anyway: never wrap.
-    #[inline(always)]
-    fn stored(z: i32) -> u32 {
-        (z >> (crate::numeric::Z_FRAC - FRAC)).clamp(0, Self::MAX as i32) as u32
+    /// Window-ID plane storage.
+    pub trait WidPlane: Sized {
+        /// A new plane.
+        const NEW: Self;
+        /// Sets pixel `i` to `id`.
+        fn put(&mut self, i: usize, id: u8);
+        /// Reads pixel `i` (0 when there is no plane).
+        fn read(&self, i: usize) -> u8;
+        /// The window-ID test.
+        fn pass(&self, i: usize, id: u8) -> bool;
     }
-}
 
-impl<T: Cell, const FRAC: u32, const N: usize> DepthPlane for ZPlane<T, FRAC, N> {
-    const NEW: Self = ZPlane(<Plane<T, N> as ColorPlane>::NEW);
-    #[inline(always)]
-    fn put(&mut self, i: usize, z: u16) {
-        self.0 .0.as_flattened_mut()[i] = T::from_u32((z as u32) << FRAC);
+    /// Storage of a [`DepthBits`] plane: depth in 16.`FRAC` in cells `T`.
+    pub struct ZPlane<T, const FRAC: u32, const N: usize>(Plane<T, N>);
+
+    impl<T: Cell, const FRAC: u32, const N: usize> ZPlane<T, FRAC, N> {
+        /// Largest stored value: 65535 with every fraction bit set.
+        const MAX: u32 = (0x1_0000 << FRAC) - 1;
+
+        /// An interpolated 16.14 depth at the plane's precision. The DDA keeps
+        /// `z <= 2^30 + 2^13` plus its drift; clamp anyway: never wrap.
+        #[inline(always)]
+        fn stored(z: i32) -> u32 {
+            (z >> (crate::numeric::Z_FRAC - FRAC)).clamp(0, Self::MAX as i32) as u32
+        }
     }
-    #[inline(always)]
-    fn read(&self, i: usize) -> u16 {
-        (self.0 .0.as_flattened()[i].to_u32() >> FRAC) as u16
+
+    impl<T: Cell, const FRAC: u32, const N: usize> DepthPlane for ZPlane<T, FRAC, N> {
+        const NEW: Self = ZPlane(<Plane<T, N> as ColorPlane>::NEW);
+        #[inline(always)]
+        fn put(&mut self, i: usize, z: u16) {
+            self.0 .0.as_flattened_mut()[i] = T::from_u32((z as u32) << FRAC);
+        }
+        #[inline(always)]
+        fn read(&self, i: usize) -> u16 {
+            (self.0 .0.as_flattened()[i].to_u32() >> FRAC) as u16
+        }
+        #[inline(always)]
+        fn test(&self, i: usize, z: i32) -> bool {
+            Self::stored(z) < self.0 .0.as_flattened()[i].to_u32()
+        }
+        #[inline(always)]
+        fn test_and_set(&mut self, i: usize, z: i32) -> bool {
+            let z = Self::stored(z);
+            let cell = &mut self.0 .0.as_flattened_mut()[i];
+            if z < cell.to_u32() {
+                *cell = T::from_u32(z);
+                true
+            } else {
+                false
+            }
+        }
     }
-    #[inline(always)]
-    fn test(&self, i: usize, z: i32) -> bool {
-        Self::stored(z) < self.0 .0.as_flattened()[i].to_u32()
-    }
-    #[inline(always)]
-    fn test_and_set(&mut self, i: usize, z: i32) -> bool {
-        let z = Self::stored(z);
-        let cell = &mut self.0 .0.as_flattened_mut()[i];
-        if z < cell.to_u32() {
-            *cell = T::from_u32(z);
+
+    impl DepthPlane for () {
+        const NEW: Self = ();
+        #[inline(always)]
+        fn put(&mut self, _: usize, _: u16) {}
+        #[inline(always)]
+        fn read(&self, _: usize) -> u16 {
+            u16::MAX
+        }
+        #[inline(always)]
+        fn test_and_set(&mut self, _: usize, _: i32) -> bool {
             true
-        } else {
-            false
+        }
+        #[inline(always)]
+        fn test(&self, _: usize, _: i32) -> bool {
+            true
+        }
+    }
+
+    impl<const N: usize> WidPlane for Plane<u8, N> {
+        const NEW: Self = <Self as ColorPlane>::NEW;
+        #[inline(always)]
+        fn put(&mut self, i: usize, id: u8) {
+            self.0.as_flattened_mut()[i] = id;
+        }
+        #[inline(always)]
+        fn read(&self, i: usize) -> u8 {
+            self.0.as_flattened()[i].to_u32() as u8
+        }
+        #[inline(always)]
+        fn pass(&self, i: usize, id: u8) -> bool {
+            self.0.as_flattened()[i] == id
+        }
+    }
+
+    impl WidPlane for () {
+        const NEW: Self = ();
+        #[inline(always)]
+        fn put(&mut self, _: usize, _: u8) {}
+        #[inline(always)]
+        fn read(&self, _: usize) -> u8 {
+            0
+        }
+        #[inline(always)]
+        fn pass(&self, _: usize, _: u8) -> bool {
+            true
         }
     }
 }
 
-impl DepthPlane for () {
-    const NEW: Self = ();
-    #[inline(always)]
-    fn put(&mut self, _: usize, _: u16) {}
-    #[inline(always)]
-    fn read(&self, _: usize) -> u16 {
-        u16::MAX
-    }
-    #[inline(always)]
-    fn test_and_set(&mut self, _: usize, _: i32) -> bool {
-        true
-    }
-    #[inline(always)]
-    fn test(&self, _: usize, _: i32) -> bool {
-        true
-    }
-}
-
-impl<const N: usize> WidPlane for Plane<u8, N> {
-    const NEW: Self = <Self as ColorPlane>::NEW;
-    #[inline(always)]
-    fn put(&mut self, i: usize, id: u8) {
-        self.0.as_flattened_mut()[i] = id;
-    }
-    #[inline(always)]
-    fn read(&self, i: usize) -> u8 {
-        self.0.as_flattened()[i].to_u32() as u8
-    }
-    #[inline(always)]
-    fn pass(&self, i: usize, id: u8) -> bool {
-        self.0.as_flattened()[i] == id
-    }
-}
-
-impl WidPlane for () {
-    const NEW: Self = ();
-    #[inline(always)]
-    fn put(&mut self, _: usize, _: u8) {}
-    #[inline(always)]
-    fn read(&self, _: usize) -> u8 {
-        0
-    }
-    #[inline(always)]
-    fn pass(&self, _: usize, _: u8) -> bool {
-        true
-    }
-}
+#[cfg(feature = "unstable")]
+pub use planes::{DepthPlane, WidPlane, ZPlane};
+#[cfg(not(feature = "unstable"))]
+pub(crate) use planes::{DepthPlane, WidPlane, ZPlane};
