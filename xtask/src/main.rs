@@ -155,7 +155,12 @@ fn ensure_qemu() -> Result<(), String> {
 }
 
 /// The firmware crates, each its own workspace, built like a user would.
-const BOARDS: [&str; 3] = ["mps2-an386", "microbit", "rp-pico-st7789"];
+const BOARDS: [&str; 4] = [
+    "mps2-an386",
+    "microbit",
+    "rp-pico-st7789",
+    "rp-pico-ssd1306",
+];
 
 fn test() -> Result<(), String> {
     ensure_toolchain()?;
@@ -219,14 +224,18 @@ fn test() -> Result<(), String> {
             ],
         )?;
     }
-    // The real-board example must build (it cannot run here); the QEMU
-    // boards are built and run by the firmware test below.
-    run_in("targets/rp-pico-st7789", "cargo", &["build", "--release"])?;
-    run_in(
-        "targets/rp-pico-st7789",
-        "cargo",
-        &["clippy", "--release", "--", "-D", "warnings"],
-    )?;
+    // The real-board examples (the README's ST7789 and SSD1306 programs
+    // as firmware) must build; they cannot run here. The QEMU boards are
+    // built and run by the firmware test below.
+    for b in ["rp-pico-st7789", "rp-pico-ssd1306"] {
+        let dir = format!("targets/{b}");
+        run_in(&dir, "cargo", &["build", "--release"])?;
+        run_in(
+            &dir,
+            "cargo",
+            &["clippy", "--release", "--", "-D", "warnings"],
+        )?;
+    }
     for b in BOARDS {
         run_in(&format!("targets/{b}"), "cargo", &["fmt", "--", "--check"])?;
     }
