@@ -57,7 +57,7 @@ impl<C> PngDisplay<C> {
     }
 
     /// Writes what the display shows to a PNG.
-    pub fn save_png(&self, path: impl AsRef<Path>) -> Result<(), String> {
+    pub fn save_png(&self, path: impl AsRef<Path>) -> crate::Result<()> {
         self.image.save_png(path)
     }
 }

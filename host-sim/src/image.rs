@@ -1,5 +1,6 @@
 //! RGB888 images and PNG input/output.
 
+use crate::error::{Error, Result};
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::Path;
@@ -31,24 +32,28 @@ impl Image {
     }
 
     /// Writes an 8-bit RGB PNG.
-    pub fn save_png(&self, path: impl AsRef<Path>) -> Result<(), String> {
+    pub fn save_png(&self, path: impl AsRef<Path>) -> Result<()> {
         let path = path.as_ref();
-        let file = File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let file = File::create(path).map_err(|e| Error::io(path, e))?;
         let mut enc = png::Encoder::new(BufWriter::new(file), self.width, self.height);
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
-        let mut w = enc
-            .write_header()
-            .map_err(|e| format!("{}: {e}", path.display()))?;
-        w.write_image_data(self.pixels.as_flattened())
-            .map_err(|e| format!("{}: {e}", path.display()))
+        let png = |e: png::EncodingError| Error::Png {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        };
+        let mut w = enc.write_header().map_err(png)?;
+        w.write_image_data(self.pixels.as_flattened()).map_err(png)
     }
 
     /// Reads an 8-bit RGB, RGBA, grey or grey-alpha PNG (alpha is dropped).
-    pub fn load_png(path: impl AsRef<Path>) -> Result<Self, String> {
+    pub fn load_png(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
-        let err = |e: &dyn std::fmt::Display| format!("{}: {e}", path.display());
-        let file = File::open(path).map_err(|e| err(&e))?;
+        let err = |e: &dyn std::fmt::Display| Error::Png {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        };
+        let file = File::open(path).map_err(|e| Error::io(path, e))?;
         let mut dec = png::Decoder::new(std::io::BufReader::new(file));
         dec.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
         let mut reader = dec.read_info().map_err(|e| err(&e))?;

@@ -8,6 +8,7 @@
 //! firmware's own drawing code runs unchanged on the host.
 
 pub mod display;
+pub mod error;
 pub mod image;
 pub mod mesh;
 pub mod metrics;
@@ -19,6 +20,7 @@ pub use tilerast_fw::rng;
 pub mod scene;
 
 pub use display::PngDisplay;
+pub use error::{Error, Location, Result};
 pub use image::Image;
 pub use obj::Limits;
 pub use render::{render, AaKind, Config, FormatKind, Rendered};

@@ -96,7 +96,8 @@ enum Cmd {
     },
 }
 
-fn run(cli: Cli) -> Result<(), String> {
+fn run(cli: Cli) -> tilerast_sim::Result<()> {
+    use tilerast_sim::Error;
     let limits = tilerast_sim::Limits {
         max_bytes: cli.max_file_bytes,
         max_line: cli.max_line_bytes,
@@ -114,11 +115,11 @@ fn run(cli: Cli) -> Result<(), String> {
             let mut s = load(&scene)?;
             if let Some(aa) = aa {
                 if aa != tilerast_sim::AaKind::None && ![0, 4, 8].contains(&s.config.dither) {
-                    return Err(format!(
+                    return Err(Error::Unsupported(format!(
                         "--aa {}: the simulator builds coverage antialiasing with dither 0, 4 or 8, and this scene uses {}",
                         aa.name(),
                         s.config.dither
-                    ));
+                    )));
                 }
                 s.config.aa = aa;
             }
@@ -129,7 +130,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 s.set_edge_aa(matches!(mode, OnOff::On));
             }
             let c = &s.config;
-            let r = render(c, &s.commands).map_err(|e| e.to_string())?;
+            let r = render(c, &s.commands)?;
             println!("scene      {}", scene.display());
             for n in &s.notes {
                 println!("           {n}");
@@ -185,8 +186,8 @@ fn run(cli: Cli) -> Result<(), String> {
         }
         Cmd::Export { scene, output } => {
             let s = load(&scene)?;
-            let bytes = s.encode().map_err(|e| e.to_string())?;
-            std::fs::write(&output, &bytes).map_err(|e| format!("{}: {e}", output.display()))?;
+            let bytes = s.encode()?;
+            std::fs::write(&output, &bytes).map_err(|e| Error::io(&output, e))?;
             println!(
                 "wrote {} ({} commands, {} bytes)",
                 output.display(),

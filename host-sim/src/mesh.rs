@@ -214,7 +214,7 @@ pub fn load(
     edges: &mut Vec<Command>,
     tags: &mut u16,
     limits: &crate::obj::Limits,
-) -> Result<MeshStats, String> {
+) -> crate::Result<MeshStats> {
     let obj = crate::obj::load(&base.join(&spec.obj), limits)?;
     Ok(build(&obj, spec, screen, out, edges, tags))
 }

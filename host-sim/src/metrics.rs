@@ -29,12 +29,12 @@ impl std::fmt::Display for Diff {
 }
 
 /// Compares two images of the same size.
-pub fn compare(a: &Image, b: &Image) -> Result<Diff, String> {
+pub fn compare(a: &Image, b: &Image) -> crate::Result<Diff> {
     if (a.width, a.height) != (b.width, b.height) {
-        return Err(format!(
-            "sizes differ: {}x{} vs {}x{}",
-            a.width, a.height, b.width, b.height
-        ));
+        return Err(crate::Error::SizeMismatch {
+            a: (a.width, a.height),
+            b: (b.width, b.height),
+        });
     }
     let (mut sse, mut max_abs, mut differing) = (0u64, 0u8, 0u64);
     for (p, q) in a.pixels.iter().zip(&b.pixels) {

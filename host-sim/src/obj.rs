@@ -20,6 +20,7 @@
 //! warning), so a file of `B` bytes is read in `O(B)` plus
 //! `O(B · MAX_EAR_CLIP²)` in the worst case.
 
+use crate::error::{Error, Location, Result};
 use std::collections::HashMap;
 use std::io::Read;
 use std::path::Path;
@@ -93,20 +94,24 @@ pub struct Obj {
 }
 
 /// Reads at most `limits.max_bytes` of a file.
-pub fn read_bounded(path: &Path, limits: &Limits) -> Result<Vec<u8>, String> {
-    let f = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+pub fn read_bounded(path: &Path, limits: &Limits) -> Result<Vec<u8>> {
+    let f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let mut buf = Vec::new();
     f.take(limits.max_bytes + 1)
         .read_to_end(&mut buf)
-        .map_err(|e| format!("{}: {e}", path.display()))?;
+        .map_err(|e| Error::io(path, e))?;
     if buf.len() as u64 > limits.max_bytes {
-        return Err(format!(
-            "{}: larger than the limit of {} bytes",
-            path.display(),
-            limits.max_bytes
-        ));
+        return Err(Error::TooLarge {
+            path: path.to_path_buf(),
+            limit: limits.max_bytes,
+        });
     }
     Ok(buf)
+}
+
+/// An [`Error::Invalid`] at `at`.
+fn invalid(at: Location, message: String) -> Error {
+    Error::Invalid { at, message }
 }
 
 /// Lines of `src` with their 1-based numbers, decoded lossily; a line
@@ -115,14 +120,13 @@ fn lines<'a>(
     src: &'a [u8],
     file: &'a str,
     limits: &'a Limits,
-) -> impl Iterator<Item = Result<(usize, String), String>> + 'a {
+) -> impl Iterator<Item = Result<(usize, String)>> + 'a {
     src.split(|&b| b == b'\n').enumerate().map(move |(i, l)| {
         if l.len() > limits.max_line {
-            return Err(format!(
-                "{file}:{}: line longer than the limit of {} bytes",
-                i + 1,
-                limits.max_line
-            ));
+            return Err(Error::LongLine {
+                at: Location::at(file, i + 1, None),
+                limit: limits.max_line,
+            });
         }
         let l = l.strip_suffix(b"\r").unwrap_or(l);
         Ok((i + 1, String::from_utf8_lossy(l).into_owned()))
@@ -137,22 +141,25 @@ fn column(line: &str, word: &str) -> usize {
 fn floats<const K: usize>(
     line: &str,
     words: &mut std::str::SplitWhitespace<'_>,
-    at: &dyn Fn(usize) -> String,
-) -> Result<[f32; K], String> {
+    at: &dyn Fn(usize) -> Location,
+) -> Result<[f32; K]> {
     let mut out = [0.0f32; K];
     for (k, o) in out.iter_mut().enumerate() {
-        let w = words
-            .next()
-            .ok_or_else(|| format!("{}: expected {K} numbers, found {k}", at(line.len() + 1)))?;
+        let w = words.next().ok_or_else(|| {
+            invalid(
+                at(line.len() + 1),
+                format!("expected {K} numbers, found {k}"),
+            )
+        })?;
         *o = w
             .parse::<f32>()
-            .map_err(|_| format!("{}: `{w}` is not a number", at(column(line, w))))?;
+            .map_err(|_| invalid(at(column(line, w)), format!("`{w}` is not a number")))?;
     }
     Ok(out)
 }
 
 /// Reads an OBJ file and the `.mtl` files it names, within `limits`.
-pub fn load(path: &Path, limits: &Limits) -> Result<Obj, String> {
+pub fn load(path: &Path, limits: &Limits) -> Result<Obj> {
     let src = read_bounded(path, limits)?;
     parse(&src, &path.display().to_string(), path.parent(), limits)
 }
@@ -208,7 +215,7 @@ impl Builder {
 
 /// Parses OBJ text; `file` names it in messages, `dir` is where `mtllib`
 /// paths start (`None`: materials are not read).
-pub fn parse(src: &[u8], file: &str, dir: Option<&Path>, limits: &Limits) -> Result<Obj, String> {
+pub fn parse(src: &[u8], file: &str, dir: Option<&Path>, limits: &Limits) -> Result<Obj> {
     let mut obj = Obj::default();
     let mut pos: Vec<([f32; 3], bool)> = Vec::new();
     let mut normals: Vec<[f32; 3]> = Vec::new();
@@ -218,7 +225,7 @@ pub fn parse(src: &[u8], file: &str, dir: Option<&Path>, limits: &Limits) -> Res
     let mut bad_used = 0usize;
     for l in lines(src, file, limits) {
         let (n, line) = l?;
-        let at = |col: usize| format!("{file}:{n}:{col}");
+        let at = |col: usize| Location::at(file, n, Some(col));
         let body = line.split('#').next().unwrap_or("");
         let mut words = body.split_whitespace();
         let Some(key) = words.next() else { continue };
@@ -286,28 +293,26 @@ pub fn parse(src: &[u8], file: &str, dir: Option<&Path>, limits: &Limits) -> Res
                 for w in words {
                     let col = column(&line, w);
                     let mut parts = w.split('/');
-                    let index = |s: Option<&str>,
-                                 len: usize,
-                                 what: &str|
-                     -> Result<Option<usize>, String> {
-                        let Some(s) = s.filter(|s| !s.is_empty()) else {
-                            return Ok(None);
+                    let index =
+                        |s: Option<&str>, len: usize, what: &str| -> Result<Option<usize>> {
+                            let Some(s) = s.filter(|s| !s.is_empty()) else {
+                                return Ok(None);
+                            };
+                            let i: i64 = s.parse().map_err(|_| {
+                                invalid(at(col), format!("`{w}` is not a vertex reference"))
+                            })?;
+                            // 1-based, or negative: relative to the end.
+                            let k = if i > 0 { i - 1 } else { len as i64 + i };
+                            if i == 0 || !(0..len as i64).contains(&k) {
+                                return Err(invalid(
+                                    at(col),
+                                    format!("{what} {i} does not exist ({len} defined so far)"),
+                                ));
+                            }
+                            Ok(Some(k as usize))
                         };
-                        let i: i64 = s
-                            .parse()
-                            .map_err(|_| format!("{}: `{w}` is not a vertex reference", at(col)))?;
-                        // 1-based, or negative: relative to the end.
-                        let k = if i > 0 { i - 1 } else { len as i64 + i };
-                        if i == 0 || !(0..len as i64).contains(&k) {
-                            return Err(format!(
-                                "{}: {what} {i} does not exist ({len} defined so far)",
-                                at(col)
-                            ));
-                        }
-                        Ok(Some(k as usize))
-                    };
                     let v = index(parts.next(), pos.len(), "vertex")?
-                        .ok_or_else(|| format!("{}: `{w}` names no vertex", at(col)))?;
+                        .ok_or_else(|| invalid(at(col), format!("`{w}` names no vertex")))?;
                     index(parts.next(), texcoords, "texture coordinate")?;
                     let vn = index(parts.next(), normals.len(), "normal")?;
                     corners.push((v, vn));
@@ -364,13 +369,13 @@ pub fn parse(src: &[u8], file: &str, dir: Option<&Path>, limits: &Limits) -> Res
 }
 
 /// Reads an `.mtl` file's materials.
-pub fn load_mtl(path: &Path, limits: &Limits) -> Result<Vec<Material>, String> {
+pub fn load_mtl(path: &Path, limits: &Limits) -> Result<Vec<Material>> {
     let src = read_bounded(path, limits)?;
     let file = path.display().to_string();
     let mut out: Vec<Material> = Vec::new();
     for l in lines(&src, &file, limits) {
         let (n, line) = l?;
-        let at = |col: usize| format!("{file}:{n}:{col}");
+        let at = |col: usize| Location::at(file.as_str(), n, Some(col));
         let body = line.split('#').next().unwrap_or("");
         let mut words = body.split_whitespace();
         let Some(key) = words.next() else { continue };

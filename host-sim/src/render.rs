@@ -69,7 +69,8 @@ pub struct Config {
 impl Config {
     /// The configuration an encoded scene's header asks for
     /// ([`tilerast::wire::SceneHeader`]), rendered in its own tiles.
-    pub fn from_header(h: &tilerast::wire::SceneHeader) -> Result<Config, String> {
+    pub fn from_header(h: &tilerast::wire::SceneHeader) -> crate::Result<Config> {
+        use crate::Error::Unsupported;
         let name = h.format.split(|&b| b == 0).next().unwrap_or_default();
         let format = [
             FormatKind::Rgb888,
@@ -80,27 +81,34 @@ impl Config {
         ]
         .into_iter()
         .find(|f| f.name().as_bytes() == name)
-        .ok_or_else(|| format!("unknown format {:?}", String::from_utf8_lossy(name)))?;
+        .ok_or_else(|| {
+            Unsupported(format!(
+                "unknown format {:?}",
+                String::from_utf8_lossy(name)
+            ))
+        })?;
         let side = |v: u16| (1..=tilerast::numeric::MAX_SIDE).contains(&v);
         if !(side(h.width) && side(h.height) && side(h.tile.0) && side(h.tile.1)) {
-            return Err(format!(
+            return Err(Unsupported(format!(
                 "bad screen {}x{} or tile {:?}",
                 h.width, h.height, h.tile
-            ));
+            )));
         }
         let tile = (h.tile.0.min(h.width), h.tile.1.min(h.height));
         if tile.0 as usize * tile.1 as usize > SIM_GROUPS * 8 {
-            return Err(format!("tile {tile:?} exceeds the simulator's tile"));
+            return Err(Unsupported(format!(
+                "tile {tile:?} exceeds the simulator's tile"
+            )));
         }
         let dither = match h.dither_log2 {
             0 => 0,
             k @ 1..=4 => 1 << k,
-            k => return Err(format!("dither 2^{k} is not built")),
+            k => return Err(Unsupported(format!("dither 2^{k} is not built"))),
         };
         let plane = |bits: u8, on: u8, what: &str| match bits {
             0 => Ok(false),
             b if b == on => Ok(true),
-            b => Err(format!("{b}-bit {what} plane is not built")),
+            b => Err(Unsupported(format!("{b}-bit {what} plane is not built"))),
         };
         Ok(Config {
             width: h.width,

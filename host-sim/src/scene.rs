@@ -76,6 +76,7 @@
 //! Every command takes an optional `window` (default 0). Errors name the file,
 //! the line and the problem.
 
+use crate::error::{Error, Location, Result};
 use crate::mesh::{self, MeshSpec, MeshStats};
 use crate::obj::Limits;
 use crate::render::{Config, FormatKind};
@@ -339,48 +340,56 @@ fn state(window: u8, mask: Option<u32>) -> State {
 impl Scene {
     /// Reads and checks a scene file; meshes are loaded relative to it.
     /// Files and lines are bounded by the default [`Limits`].
-    pub fn load(path: impl AsRef<Path>) -> Result<Scene, String> {
+    pub fn load(path: impl AsRef<Path>) -> Result<Scene> {
         Scene::load_with(path, &Limits::default())
     }
 
     /// [`Scene::load`] with explicit limits on file size and line length
     /// (the scene file and every OBJ and MTL it loads).
-    pub fn load_with(path: impl AsRef<Path>, limits: &Limits) -> Result<Scene, String> {
+    pub fn load_with(path: impl AsRef<Path>, limits: &Limits) -> Result<Scene> {
         let path = path.as_ref();
         let bytes = crate::obj::read_bounded(path, limits)?;
-        let src = String::from_utf8(bytes)
-            .map_err(|e| format!("{}: not UTF-8 text: {e}", path.display()))?;
+        let src = String::from_utf8(bytes).map_err(|e| {
+            let bad = e.utf8_error().valid_up_to();
+            let line = e.as_bytes()[..bad].iter().filter(|&&b| b == b'\n').count() + 1;
+            Error::Invalid {
+                at: Location::at(path, line, None),
+                message: format!("not UTF-8 text: {}", e.utf8_error()),
+            }
+        })?;
         if let Some(n) = src.lines().position(|l| l.len() > limits.max_line) {
-            return Err(format!(
-                "{}:{}: line longer than the limit of {} bytes",
-                path.display(),
-                n + 1,
-                limits.max_line
-            ));
+            return Err(Error::LongLine {
+                at: Location::at(path, n + 1, None),
+                limit: limits.max_line,
+            });
         }
         let mut scene = Scene::parse_with(&src, path.parent().unwrap_or(Path::new(".")), limits)
-            .map_err(|e| format!("{}:{e}", path.display()))?;
+            .map_err(|e| e.in_file(path))?;
         if let Some(stem) = path.file_stem() {
             scene.name = stem.to_string_lossy().into_owned();
         }
         Ok(scene)
     }
 
-    /// Parses scene text; errors start with `line: `.
-    pub fn parse(src: &str, base: &Path) -> Result<Scene, String> {
+    /// Parses scene text; errors are located by line ([`Error::Invalid`]).
+    pub fn parse(src: &str, base: &Path) -> Result<Scene> {
         Scene::parse_with(src, base, &Limits::default())
     }
 
     /// [`Scene::parse`] with explicit limits for the files it loads.
-    pub fn parse_with(src: &str, base: &Path, limits: &Limits) -> Result<Scene, String> {
+    pub fn parse_with(src: &str, base: &Path, limits: &Limits) -> Result<Scene> {
         let lines = Lines::new(src);
+        let invalid = |line: usize, message: String| Error::Invalid {
+            at: Location::line(line),
+            message,
+        };
         let file: SceneFile = toml::from_str(src).map_err(|e| {
             let line = e.span().map(|s| lines.of(s.start)).unwrap_or(0);
-            format!("{line}: {}", e.message().trim())
+            invalid(line, e.message().trim().to_string())
         })?;
         let screen_span = file.screen.span();
         let at_screen =
-            |key: &str, e: String| format!("{}: [screen] {e}", lines.key(&screen_span, key));
+            |key: &str, e: String| invalid(lines.key(&screen_span, key), format!("[screen] {e}"));
         let s = file.screen.get_ref();
         let side_ok = |v: u16| (1..=MAX_SIDE).contains(&v);
         for (key, v) in [("width", s.width), ("height", s.height)] {
@@ -453,7 +462,7 @@ impl Scene {
         for w in &file.window {
             let line = lines.key(&w.span(), "rect");
             let w = w.get_ref();
-            let r = rect(w.rect).map_err(|e| format!("{line}: {e}"))?;
+            let r = rect(w.rect).map_err(|e| invalid(line, e))?;
             commands.push(Command::WidFill { rect: r, wid: w.id });
             if let Some([r0, g0, b0]) = w.background {
                 commands.push(Command::Fill {
@@ -468,7 +477,7 @@ impl Scene {
             // An error names the line of the key it is about.
             let key = |k: &'static str| {
                 let line = lines.key(&span, k);
-                move |e: String| format!("{line}: {e}")
+                move |e: String| invalid(line, e)
             };
             let cmd = match c.get_ref() {
                 CommandSpec::Triangle {
@@ -635,7 +644,7 @@ impl Scene {
                         &mut tags,
                         limits,
                     )
-                    .map_err(key("obj"))?;
+                    .map_err(|e| key("obj")(e.to_string()))?;
                     let first_edge = edges.len();
                     edges.extend(found.into_iter().map(|e| (spec.edge_aa, e)));
                     let mut note = format!(
@@ -785,7 +794,9 @@ mod tests {
     const HEAD: &str = "[screen]\nwidth = 32\nheight = 16\nformat = \"rgb565\"\n";
 
     fn err(body: &str) -> String {
-        Scene::parse(&format!("{HEAD}{body}"), Path::new(".")).unwrap_err()
+        Scene::parse(&format!("{HEAD}{body}"), Path::new("."))
+            .unwrap_err()
+            .to_string()
     }
 
     #[test]
@@ -800,7 +811,9 @@ mod tests {
         );
         let e = err("\n[[command]]\nkind = \"circle\"\n");
         assert!(e.starts_with("6: ") || e.starts_with("7: "), "{e}");
-        let e = Scene::parse("[screen]\nwidth = 99999\n", Path::new(".")).unwrap_err();
+        let e = Scene::parse("[screen]\nwidth = 99999\n", Path::new("."))
+            .unwrap_err()
+            .to_string();
         assert!(e.starts_with("2: "), "{e}");
         let e = err("\n[[command]]\nkind = \"span\"\nx = 0\ny = 0\nlen = 300\nrgb = [0, 0, 0]\ndrgb = [1, 0, 0]\n");
         assert!(e.starts_with("10: ") && e.contains("span"), "{e}");
@@ -827,13 +840,15 @@ mod tests {
             "[screen]\nwidth = 5000\nheight = 5\nformat = \"binary\"\n",
             Path::new("."),
         )
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("must be 1..=4096"), "{e}");
         let e = Scene::parse(
             "[screen]\nwidth = 0\nheight = 5\nformat = \"binary\"\n",
             Path::new("."),
         )
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("must be 1..=4096"), "{e}");
     }
 

@@ -39,7 +39,7 @@ pub fn model_scene(obj: &Path) -> Result<Scene, String> {
         SIZE.1,
         obj.display().to_string()
     );
-    let mut s = Scene::parse(&src, Path::new("."))?;
+    let mut s = Scene::parse(&src, Path::new(".")).map_err(|e| e.to_string())?;
     s.name = obj
         .file_stem()
         .map(|n| n.to_string_lossy().into_owned())
@@ -190,7 +190,7 @@ pub fn measure(obj: &Path) -> Result<ModelResult, String> {
     let mut errors = Vec::new();
     for (aa, _) in MODES {
         let i = img(aa)?;
-        errors.push(compare(&i, &reference)?.sse);
+        errors.push(compare(&i, &reference).map_err(|e| e.to_string())?.sse);
         images.push(i);
     }
     images.push(reference);

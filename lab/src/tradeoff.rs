@@ -645,7 +645,7 @@ fn measure(s: &Subject, set: Setting, runs: usize, m4: &[(String, f64)]) -> Resu
         }
     };
     let r = r.map_err(err)?;
-    let centre = compare(&r.image, &s.centre_img)?;
+    let centre = compare(&r.image, &s.centre_img).map_err(|e| e.to_string())?;
     let artifacts = artifacts_meaningful.then(|| {
         (0..r.raw.len())
             .filter(|&i| {
@@ -670,7 +670,7 @@ fn measure(s: &Subject, set: Setting, runs: usize, m4: &[(String, f64)]) -> Resu
         setting: set.label(),
         short: set.short(),
         knob_bits: set.knob_bits(),
-        ideal: compare(&r.image, &s.ideal)?,
+        ideal: compare(&r.image, &s.ideal).map_err(|e| e.to_string())?,
         centre,
         blur_rms: rms(&box_blur(&r.image, BLUR), &s.centre_blur),
         artifacts,

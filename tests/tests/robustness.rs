@@ -120,7 +120,7 @@ fn scene_parsing_is_linear() {
     src += "\n[[command]]\nkind = \"fill\"\nrgb = [1, 2, 3]\nrect = [0, 0, -1, 1]\n";
     let lines = src.lines().count();
     let t = std::time::Instant::now();
-    let e = Scene::parse(&src, Path::new(".")).unwrap_err();
+    let e = Scene::parse(&src, Path::new(".")).unwrap_err().to_string();
     let took = t.elapsed();
     assert!(e.starts_with(&format!("{lines}: ")), "{e}");
     assert!(took.as_secs_f64() < 20.0, "100,000 commands took {took:?}");
@@ -134,24 +134,32 @@ fn obj_path_to_dev_zero_is_bounded() {
         max_bytes: 1 << 20,
         max_line: 4096,
     };
-    let e = Scene::load_with(mesh_scene(&d, "/dev/zero", ""), &limits).unwrap_err();
+    let e = Scene::load_with(mesh_scene(&d, "/dev/zero", ""), &limits)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("larger than the limit of 1048576 bytes"), "{e}");
     write(
         &d,
         "m.obj",
         "mtllib /dev/zero\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
     );
-    let e = Scene::load_with(mesh_scene(&d, "m.obj", ""), &limits).unwrap_err();
+    let e = Scene::load_with(mesh_scene(&d, "m.obj", ""), &limits)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("/dev/zero: larger than the limit"), "{e}");
     // A large file without newlines stops at the line limit.
     write(&d, "long.obj", vec![b'v'; 8192]);
-    let e = Scene::load_with(mesh_scene(&d, "long.obj", ""), &limits).unwrap_err();
+    let e = Scene::load_with(mesh_scene(&d, "long.obj", ""), &limits)
+        .unwrap_err()
+        .to_string();
     assert!(
         e.contains("long.obj:1: line longer than the limit of 4096 bytes"),
         "{e}"
     );
     // The scene file itself is bounded the same way.
-    let e = Scene::load_with("/dev/zero", &limits).unwrap_err();
+    let e = Scene::load_with("/dev/zero", &limits)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("larger than the limit"), "{e}");
 }
 
@@ -196,13 +204,13 @@ fn huge_coordinate_is_out_of_range_not_infinite() {
         &format!("{HEAD}\n[[command]]\nkind = \"triangle\"\nv = [[1e308, 0, 0, 0, 0, 0], [1, 0, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0]]\n"),
         Path::new("."),
     )
-    .unwrap_err();
+    .unwrap_err().to_string();
     assert!(e.contains("outside the documented range"), "{e}");
     let e = Scene::parse(
         &format!("{HEAD}\n[[command]]\nkind = \"line\"\nfrom = [1e308, 0]\nto = [1, 1]\nrgb = [1, 1, 1]\n"),
         Path::new("."),
     )
-    .unwrap_err();
+    .unwrap_err().to_string();
     assert!(e.contains("out of range"), "{e}");
 }
 
@@ -340,13 +348,17 @@ fn missing_mtl_and_undefined_material_warn() {
 fn errors_name_the_key_line_and_the_obj_line() {
     let d = dir("errlines");
     write(&d, "bad.obj", "v 0 0 0\nv 1 0 0\nv 1 x 0\n");
-    let e = Scene::load(mesh_scene(&d, "bad.obj", "")).unwrap_err();
+    let e = Scene::load(mesh_scene(&d, "bad.obj", ""))
+        .unwrap_err()
+        .to_string();
     assert!(
         e.contains("scene.toml:9: ") && e.contains("bad.obj:3:5: `x` is not a number"),
         "{e}"
     );
     write(&d, "idx.obj", "v 0 0 0\nf 1 2 3\n");
-    let e = Scene::load(mesh_scene(&d, "idx.obj", "")).unwrap_err();
+    let e = Scene::load(mesh_scene(&d, "idx.obj", ""))
+        .unwrap_err()
+        .to_string();
     assert!(
         e.contains("idx.obj:2:5: vertex 2 does not exist (1 defined so far)"),
         "{e}"
@@ -355,13 +367,15 @@ fn errors_name_the_key_line_and_the_obj_line() {
         "[screen]\nformat = \"rgb565\"\nheight = 8\nwidth = 99999\n",
         Path::new("."),
     )
-    .unwrap_err();
+    .unwrap_err()
+    .to_string();
     assert!(e.starts_with("4: "), "{e}");
     let e = Scene::parse(
         "[screen]\nwidth = 8\nheight = 8\nformat = \"rgb565\"\n\ndither = 3\n",
         Path::new("."),
     )
-    .unwrap_err();
+    .unwrap_err()
+    .to_string();
     assert!(e.starts_with("6: "), "{e}");
 }
 
