@@ -435,14 +435,16 @@ fn fuzz(args: &[String]) -> Result<(), String> {
     };
     let time = format!("-max_total_time={seconds}");
     for t in targets {
-        let corpus = format!("corpus/{t}");
-        // Optimised, with debug assertions and overflow checks on (-a).
+        let (corpus, seeds) = (format!("corpus/{t}"), format!("seeds/{t}"));
+        // Optimised, with debug assertions and overflow checks on (-a); new
+        // inputs go to the corpus, the hand-written seeds stay as they are.
         fuzz(&[
             "run",
             "-O",
             "-a",
             t,
             &corpus,
+            &seeds,
             "--",
             &time,
             "-rss_limit_mb=4096",
