@@ -208,3 +208,73 @@ impl<const N: usize, C: TileConfig> Tile<N, C> {
         Frame::new(width, height, TW, TH)
     }
 }
+
+/// A frame, its tile and its commands as one `embedded-graphics`
+/// [`Drawable`](embedded_graphics_core::Drawable): drawing it renders every
+/// tile and flushes it to the target, so a display list composes with the
+/// ecosystem's drawing code (`.draw(&mut display)`), and the tile's colour
+/// type is the target's.
+///
+/// `Drawable::draw` can only fail with the target's error, so the raster
+/// core's own error comes back in the output: `Ok(Ok(stats))` when the
+/// frame was drawn, `Ok(Err(e))` when the core refused a command or size.
+///
+/// ```
+/// use tilerast::prelude::*;
+/// use embedded_graphics_core::{pixelcolor::Rgb565, prelude::*};
+/// # struct Screen;
+/// # impl OriginDimensions for Screen { fn size(&self) -> Size { Size::new(64, 48) } }
+/// # impl DrawTarget for Screen {
+/// #     type Color = Rgb565; type Error = core::convert::Infallible;
+/// #     fn draw_iter<I: IntoIterator<Item = Pixel<Rgb565>>>(&mut self, _: I) -> Result<(), Self::Error> { Ok(()) }
+/// # }
+/// # let mut display = Screen;
+/// type PanelTile = Tile<{ groups(32, 16) }, St7789Config>;
+/// let mut tile = PanelTile::new();
+/// let list = [Command::fill(Rect::new(0, 0, 64, 48), Rgb::new(0, 0, 255))];
+/// let frame = PanelTile::frame::<32, 16>(64, 48)?;
+/// let stats = frame.drawing(&mut tile, &list[..]).draw(&mut display).unwrap()?;
+/// assert_eq!(stats.tiles, 6);
+/// # Ok::<(), Error>(())
+/// ```
+pub struct Drawing<'a, const N: usize, C: TileConfig, S: CommandSource + ?Sized> {
+    frame: &'a Frame,
+    tile: core::cell::RefCell<&'a mut Tile<N, C>>,
+    cmds: &'a S,
+}
+
+impl Frame {
+    /// This frame's rendering of `cmds` with `tile`, as a
+    /// [`Drawable`](embedded_graphics_core::Drawable) ([`Drawing`]).
+    pub fn drawing<'a, const N: usize, C: TileConfig, S: CommandSource + ?Sized>(
+        &'a self,
+        tile: &'a mut Tile<N, C>,
+        cmds: &'a S,
+    ) -> Drawing<'a, N, C, S> {
+        Drawing {
+            frame: self,
+            tile: core::cell::RefCell::new(tile),
+            cmds,
+        }
+    }
+}
+
+impl<const N: usize, C: TileConfig, S: CommandSource + ?Sized> embedded_graphics_core::Drawable
+    for Drawing<'_, N, C, S>
+{
+    type Color = <C::Format as PixelFormat>::Color;
+    type Output = Result<FrameStats, Error>;
+
+    fn draw<D>(&self, target: &mut D) -> Result<Self::Output, D::Error>
+    where
+        D: DrawTarget<Color = Self::Color>,
+    {
+        // The only borrow of the tile: `draw` cannot be re-entered.
+        let mut tile = self.tile.borrow_mut();
+        match self.frame.render(&mut tile, self.cmds, target) {
+            Ok(stats) => Ok(Ok(stats)),
+            Err(FlushError::Raster(e)) => Ok(Err(e)),
+            Err(FlushError::Target(e)) => Err(e),
+        }
+    }
+}
