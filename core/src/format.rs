@@ -423,43 +423,26 @@ mod planes {
         fn from_u32(v: u32) -> Self;
     }
 
-    impl Cell for u8 {
-        const ZERO: Self = 0;
-        #[inline(always)]
-        fn to_u32(self) -> u32 {
-            self as u32
-        }
-        #[inline(always)]
-        fn from_u32(v: u32) -> Self {
-            v as u8
-        }
+    /// The unsigned integer cells.
+    macro_rules! int_cells {
+        ($($t:ty),*) => {$(
+            impl Cell for $t {
+                const ZERO: Self = 0;
+                #[inline(always)]
+                #[allow(clippy::unnecessary_cast)]
+                fn to_u32(self) -> u32 {
+                    self as u32
+                }
+                #[inline(always)]
+                #[allow(clippy::unnecessary_cast)]
+                fn from_u32(v: u32) -> Self {
+                    v as $t
+                }
+            }
+        )*};
     }
+    int_cells!(u8, u16, u32);
 
-    impl Cell for u16 {
-        const ZERO: Self = 0;
-        #[inline(always)]
-        fn to_u32(self) -> u32 {
-            self as u32
-        }
-        #[inline(always)]
-        fn from_u32(v: u32) -> Self {
-            v as u16
-        }
-    }
-
-    impl Cell for u32 {
-        const ZERO: Self = 0;
-        #[inline(always)]
-        fn to_u32(self) -> u32 {
-            self
-        }
-        #[inline(always)]
-        fn from_u32(v: u32) -> Self {
-            v
-        }
-    }
-
-    /// Three bytes, `0xRRGGBB` order: RGB888 without padding.
     impl Cell for [u8; 3] {
         const ZERO: Self = [0; 3];
         #[inline(always)]
