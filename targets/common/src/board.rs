@@ -1,6 +1,6 @@
 //! The board runtime (feature `board`): what every firmware's `main` calls.
 //!
-//! Instructions are counted as `../shared/DESIGN.md` prescribes: QEMU runs
+//! Instructions are counted as the project's design notes prescribe: QEMU runs
 //! with `-icount shift=0` (one instruction per virtual nanosecond) and
 //! SysTick counts the core clock, so one tick is a fixed number of
 //! instructions per board (40 on `mps2-an386`, 62.5 on `microbit`). Each
