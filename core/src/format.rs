@@ -120,7 +120,7 @@ const _: () = assert!(
 /// (as opposed to signed steps) take a `u32` path — `v * max + 127` stays
 /// below 2^32 for `v < 2^24`, `max <= 255` — with the same result as the
 /// `i64` one and no 64-bit division (a long library call on Cortex-M0).
-#[inline]
+#[inline(always)]
 fn scale(v: i64, max: i32) -> i32 {
     match u32::try_from(v) {
         Ok(u) if u < 1 << 24 => ((u * max as u32 + 127) / 255) as i32,
@@ -147,7 +147,7 @@ macro_rules! rgb_format {
             const MAX: [i32; 3] = [$r, $g, $b];
             const MASK_ALL: u32 = $mask;
             const NAME: &'static str = $label;
-            #[inline]
+            #[inline(always)]
             fn lanes_from_rgb(rgb: [i64; 3]) -> [i32; 3] {
                 [scale(rgb[0], $r), scale(rgb[1], $g), scale(rgb[2], $b)]
             }
@@ -393,8 +393,15 @@ mod planes {
     impl<const C: usize> Lanes for [i32; C] {
         const LEN: usize = C;
         #[inline(always)]
-        fn from_fn(f: impl FnMut(usize) -> i32) -> Self {
-            core::array::from_fn(f)
+        fn from_fn(mut f: impl FnMut(usize) -> i32) -> Self {
+            // A plain loop LLVM unrolls: `core::array::from_fn` stayed an
+            // out-of-line call on thumbv7em (1.2 M instructions a teapot
+            // frame, measured).
+            let mut out = [0; C];
+            for (i, o) in out.iter_mut().enumerate() {
+                *o = f(i);
+            }
+            out
         }
         #[inline(always)]
         fn lane(&self, i: usize) -> i32 {

@@ -3,6 +3,7 @@
 //! bounds touch it, and is flushed to the display. The result is
 //! byte-identical to rendering the frame as one big tile.
 
+use crate::bin::{Bins, Grid};
 use crate::command::Command;
 use crate::config::TileConfig;
 use crate::error::{Error, FlushError};
@@ -23,35 +24,63 @@ pub struct FrameStats {
     pub tiles: u32,
     /// Commands replayed, summed over tiles (binning skips the others).
     pub replayed: u32,
+    /// Passes over the command list that binned commands (one per band of
+    /// tiles; 1 when the whole frame fits the bins).
+    pub bin_passes: u32,
+    /// Most bin entries one band used.
+    pub bin_peak: u32,
+    /// Tiles that replayed the whole list unbinned (the bins were disabled,
+    /// or too small for that tile alone).
+    pub unbinned_tiles: u32,
 }
 
 /// Where a frame's commands come from: a slice, a [`DisplayList`], or an
-/// encoded list in flash ([`Encoded`](crate::wire::Encoded)). Each tile replays the source.
+/// encoded list in flash ([`Encoded`](crate::wire::Encoded)).
+///
+/// A source names each command by a *key* (its index, or its byte offset in
+/// an encoded list): the binning pass ([`crate::bin`]) visits every command
+/// once with its key, and each tile then replays only its own keys, read in
+/// place — no command is copied into the bins.
 pub trait CommandSource {
-    /// Checks every command once per frame.
-    fn validate(&self) -> Result<(), Error>;
+    /// Calls `f(key, command)` with each command, in order, validating each
+    /// (the first invalid command ends the walk with its error). Keys
+    /// strictly increase.
+    fn each_keyed(&self, f: impl FnMut(u32, &Command)) -> Result<(), Error>;
+    /// Calls `f` with the commands of `keys` (increasing, each a key
+    /// [`Self::each_keyed`] gave), in that order.
+    fn replay(&self, keys: impl Iterator<Item = u32>, f: impl FnMut(&Command));
+    /// Checks every command.
+    fn validate(&self) -> Result<(), Error> {
+        self.each_keyed(|_, _| {})
+    }
     /// Calls `f` with each command, in order. Commands reaching `f` are
-    /// valid (a source that decodes validates as it goes).
-    fn each(&self, f: impl FnMut(&Command)) -> Result<(), Error>;
+    /// valid.
+    fn each(&self, mut f: impl FnMut(&Command)) -> Result<(), Error> {
+        self.each_keyed(|_, c| f(c))
+    }
 }
 
 impl CommandSource for [Command] {
-    fn validate(&self) -> Result<(), Error> {
-        self.iter().try_for_each(Command::validate)
+    fn each_keyed(&self, mut f: impl FnMut(u32, &Command)) -> Result<(), Error> {
+        self.iter().zip(0..).try_for_each(|(c, k)| {
+            c.validate()?;
+            f(k, c);
+            Ok(())
+        })
     }
-    fn each(&self, f: impl FnMut(&Command)) -> Result<(), Error> {
-        self.iter().for_each(f);
-        Ok(())
+    fn replay(&self, keys: impl Iterator<Item = u32>, mut f: impl FnMut(&Command)) {
+        keys.filter_map(|k| self.get(k as usize)).for_each(|c| f(c))
     }
 }
 
 impl<const CAP: usize> CommandSource for DisplayList<CAP> {
-    fn validate(&self) -> Result<(), Error> {
-        Ok(()) // validated by `push`
-    }
-    fn each(&self, f: impl FnMut(&Command)) -> Result<(), Error> {
-        self.iter().for_each(f);
+    fn each_keyed(&self, mut f: impl FnMut(u32, &Command)) -> Result<(), Error> {
+        // Validated by `push`.
+        self.iter().zip(0..).for_each(|(c, k)| f(k, c));
         Ok(())
+    }
+    fn replay(&self, keys: impl Iterator<Item = u32>, mut f: impl FnMut(&Command)) {
+        keys.filter_map(|k| self.get(k as usize)).for_each(|c| f(c))
     }
 }
 
@@ -121,43 +150,157 @@ impl Frame {
             })
     }
 
+    /// The tile grid.
+    fn grid(&self) -> Grid {
+        let (tw, th) = (self.tile_w as u32, self.tile_h as u32);
+        Grid {
+            w: self.width as u32,
+            h: self.height as u32,
+            tw,
+            th,
+            cols: (self.width as u32).div_ceil(tw),
+            rows: (self.height as u32).div_ceil(th),
+        }
+    }
+
+    /// The rectangle of tile `t` (row-major index).
+    fn tile_rect(&self, g: &Grid, t: u32) -> Rect {
+        let (x, y) = ((t % g.cols) * g.tw, (t / g.cols) * g.th);
+        Rect::new(x as i32, y as i32, g.tw.min(g.w - x), g.th.min(g.h - y))
+    }
+
     /// Renders every tile and hands each finished tile to `done` (an
     /// overlay drawn with `embedded-graphics`, then a flush, a hash, a copy
-    /// into a PNG...). Commands are validated once per frame.
+    /// into a PNG...), without bins: each tile walks the whole list
+    /// ([`Frame::render_binned`] with `Bins<0, 0>`).
     pub fn render_with<const N: usize, C: TileConfig, S, E>(
         &self,
         tile: &mut Tile<N, C>,
+        cmds: &S,
+        done: impl FnMut(&mut Tile<N, C>) -> Result<(), E>,
+    ) -> Result<FrameStats, FlushError<E>>
+    where
+        S: CommandSource + ?Sized,
+    {
+        self.render_binned(tile, &mut Bins::<0, 0>::new(), cmds, done)
+    }
+
+    /// Renders every tile and hands each finished tile to `done`, binning
+    /// the commands first ([`crate::bin`]): each tile replays only the
+    /// commands whose bounds touch it. Commands are validated once, by the
+    /// first binning pass, before any tile is drawn. Bins too small for the
+    /// frame split it into bands (more passes), never into an error; the
+    /// output is the same whatever the bins.
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// use tilerast::bin::Bins;
+    /// type T = Tile<{ groups(16, 16) }, Rgb565Format>;
+    /// let frame = T::frame::<16, 16>(64, 32)?; // 8 tiles
+    /// let list = [Command::fill(Rect::new(0, 0, 20, 20), Rgb::new(9, 9, 9)),
+    ///             Command::fill(Rect::new(40, 20, 4, 4), Rgb::new(1, 2, 3))];
+    /// let mut tile = T::new();
+    /// let mut bins: Bins<64, 8> = Bins::new();
+    /// let stats = frame.render_binned(&mut tile, &mut bins, &list[..], |_| Ok::<(), ()>(()))
+    ///     .map_err(|_| Error::BadSize)?;
+    /// assert_eq!((stats.tiles, stats.replayed, stats.bin_passes), (8, 5, 1));
+    /// # Ok::<(), Error>(())
+    /// ```
+    pub fn render_binned<const N: usize, C: TileConfig, S, E, const CAP: usize, const TB: usize>(
+        &self,
+        tile: &mut Tile<N, C>,
+        bins: &mut Bins<CAP, TB>,
         cmds: &S,
         mut done: impl FnMut(&mut Tile<N, C>) -> Result<(), E>,
     ) -> Result<FrameStats, FlushError<E>>
     where
         S: CommandSource + ?Sized,
     {
-        cmds.validate()?;
+        let g = self.grid();
+        let count = g.cols * g.rows;
         let mut stats = FrameStats::default();
-        for area in self.tiles() {
-            tile.begin(area, &self.clear)?;
-            let mut replay = |tile: &mut Tile<N, C>| {
-                cmds.each(|cmd| {
-                    let bounds = if <C::Aa as AaMode>::SAMPLES > 0 {
-                        cmd.coverage_bounds()
-                    } else {
-                        cmd.bounds()
-                    };
-                    if bounds.and_then(|b| b.intersect(&area)).is_some() {
-                        tile.draw_valid(cmd);
-                        stats.replayed += 1;
-                    }
-                })
-            };
-            replay(tile)?;
-            // With coverage antialiasing: resolve, then spans and lines over
-            // the resolved pixels.
-            if tile.finish() {
-                replay(tile)?;
+        let aa = <C::Aa as AaMode>::SAMPLES > 0;
+        let bounds = |cmd: &Command| {
+            if aa {
+                cmd.coverage_bounds()
+            } else {
+                cmd.bounds()
             }
-            done(tile).map_err(FlushError::Target)?;
-            stats.tiles += 1;
+        };
+        let enabled = Bins::<CAP, TB>::enabled();
+        if !enabled {
+            cmds.validate()?;
+        }
+        // A band of tiles known to fit the bins (from an overflowing pass).
+        let mut fits: Option<u32> = None;
+        let mut t0 = 0;
+        while t0 < count {
+            let band = fits.take().unwrap_or((TB as u32).min(count - t0));
+            let t1 = t0 + band;
+            let mut binned = false;
+            if enabled {
+                bins.reset(band as usize);
+                let mut full = false;
+                cmds.each_keyed(|key, cmd| {
+                    let Some((x0, x1, y0, y1)) = bounds(cmd).and_then(|b| g.span(&b)) else {
+                        return;
+                    };
+                    for ty in y0..=y1 {
+                        let row = ty * g.cols;
+                        let lo = (row + x0).max(t0);
+                        let hi = (row + x1 + 1).min(t1);
+                        for t in lo..hi {
+                            full |= !bins.push((t - t0) as usize, key);
+                        }
+                    }
+                })?;
+                stats.bin_passes += 1;
+                stats.bin_peak = stats.bin_peak.max(bins.len() as u32);
+                if full {
+                    // Bin the tiles that fit together in one more pass; a
+                    // tile that alone overflows replays the whole list.
+                    let k = bins.fitting(band as usize) as u32;
+                    if k > 0 {
+                        fits = Some(k);
+                        continue;
+                    }
+                } else {
+                    binned = true;
+                }
+            }
+            let last = if binned { t1 } else { t0 + 1 };
+            for t in t0..last {
+                let area = self.tile_rect(&g, t);
+                tile.begin(area, &self.clear)?;
+                let mut replay = |tile: &mut Tile<N, C>| {
+                    if binned {
+                        cmds.replay(bins.keys((t - t0) as usize), |cmd| {
+                            tile.draw_valid(cmd);
+                            stats.replayed += 1;
+                        });
+                    } else {
+                        // Validated already: no error can come back.
+                        let _ = cmds.each(|cmd| {
+                            if bounds(cmd).and_then(|b| b.intersect(&area)).is_some() {
+                                tile.draw_valid(cmd);
+                                stats.replayed += 1;
+                            }
+                        });
+                    }
+                };
+                replay(tile);
+                // With coverage antialiasing: resolve, then spans and lines
+                // over the resolved pixels.
+                if tile.finish() {
+                    replay(tile);
+                }
+                done(tile).map_err(FlushError::Target)?;
+                stats.tiles += 1;
+            }
+            if !binned {
+                stats.unbinned_tiles += 1;
+            }
+            t0 = last;
         }
         Ok(stats)
     }

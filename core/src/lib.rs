@@ -23,7 +23,8 @@
 //! | raster | `raster` (internal): `traverse`, `span`, [`line`](mod@line), [`coverage`] | exact per-row coverage with the top-left fill rule; the span DDA every primitive ends in (seed 001 §II.1); Bresenham and two-point (Wu) lines and edge antialiasing (seed 003); coverage masks and the RUF buffer (seed 000) |
 //! | fragment | [`fragment`], [`dither`] | window-ID test, Z test (less-than, read-modify-write), then one store path: address-bit ordered dither (seed 001 §II.3), pack, plane mask, store |
 //! | tile planes | [`config`], [`tile`] | colour, depth, window-ID and coverage planes chosen by one configuration type; drawing into them |
-//! | bin, frame, flush | [`frame`] | a screen cut into tiles, each replaying the commands whose bounds touch it, then flushed to any `embedded-graphics` `DrawTarget` |
+//! | bin | [`bin`] | one pass sorts the frame's commands into per-tile lists in bins of a capacity the user picks (a frame that overflows them is split into bands, never refused) |
+//! | frame, flush | [`frame`] | a screen cut into tiles, each replaying its binned commands, then flushed to any `embedded-graphics` `DrawTarget` |
 //!
 //! Beside the pipeline: [`wire`] encodes display lists as bytes (for flash),
 //! [`hash`] checks output bit for bit (a CRC32 `DrawTarget`).
@@ -79,6 +80,7 @@ pub mod geom;
 pub mod numeric;
 
 // The pipeline, in order; a stage imports only the stages before it.
+pub mod bin;
 pub mod command;
 pub mod list;
 mod raster;
@@ -102,6 +104,7 @@ pub use fixed;
 
 /// Everything a firmware author needs, in one import.
 pub mod prelude {
+    pub use crate::bin::Bins;
     pub use crate::command::{Command, SpanCmd, State, Vertex};
     pub use crate::config::{groups, Planes, Ssd1306Config, St7789Config, TileConfig};
     pub use crate::error::{Error, FlushError};

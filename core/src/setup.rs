@@ -57,12 +57,81 @@ impl Edge {
     }
 }
 
+/// The integer a triangle's edge functions are evaluated in: `i32` when
+/// the triangle's box is under [`SMALL_EXTENT`] sub-pixels on both axes
+/// (every triangle of a small display), `i64` otherwise. Both give exactly
+/// the same values; `i32` divides with one instruction on the Cortex-M4 and
+/// without a 64-bit library call on the Cortex-M0.
+pub(crate) trait EdgeInt:
+    Copy
+    + Ord
+    + core::fmt::Debug
+    + core::ops::Add<Output = Self>
+    + core::ops::Sub<Output = Self>
+    + core::ops::Mul<Output = Self>
+    + core::ops::Neg<Output = Self>
+    + core::ops::AddAssign
+{
+    /// 0.
+    const ZERO: Self;
+    /// 1.
+    const ONE: Self;
+    /// `v`, which the caller knows to fit.
+    fn from_i64(v: i64) -> Self;
+    /// Widened.
+    fn to_i64(self) -> i64;
+    /// Floor division for `d > 0`.
+    fn div_floor(self, d: Self) -> Self;
+}
+
+macro_rules! edge_int {
+    ($($t:ty),*) => {$(
+        impl EdgeInt for $t {
+            const ZERO: Self = 0;
+            const ONE: Self = 1;
+            #[inline(always)]
+            fn from_i64(v: i64) -> Self {
+                v as $t
+            }
+            #[inline(always)]
+            fn to_i64(self) -> i64 {
+                self as i64
+            }
+            #[inline(always)]
+            fn div_floor(self, d: Self) -> Self {
+                let q = self / d;
+                if self % d < 0 { q - 1 } else { q }
+            }
+        }
+    )*};
+}
+edge_int!(i32, i64);
+
+/// Largest box side, in sub-pixels, of a triangle set up in `i32`: sides
+/// and offsets below 2^14 + 2^5 keep each product below 2^29 and every edge
+/// value below 2^30.
+pub(crate) const SMALL_EXTENT: i64 = 1 << 14;
+
+/// One edge relative to the anchor pixel `(ax, ay)` (the top-left pixel of
+/// the triangle's box): `E(px, py) = a (px - ax) + b + step (py - ay)`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct EdgeAt<T> {
+    /// Change per pixel in x: `-16 dy`.
+    pub a: T,
+    /// Value at the anchor pixel's centre.
+    pub b: T,
+    /// Change per row: `16 dx`.
+    pub step: T,
+    /// 0 for top-left edges, 1 otherwise.
+    pub bias: T,
+}
+
 /// A triangle ready for traversal: edges, pixel bounds and attribute planes.
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct TriangleSetup<L: Lanes> {
-    /// `e[i]` is the edge opposite vertex `i`.
-    pub e: [Edge; 3],
-    /// Pixels whose centres can be inside.
+pub(crate) struct TriangleSetup<L: Lanes, T> {
+    /// `e[i]` is the edge opposite vertex `i`, relative to the anchor.
+    pub e: [EdgeAt<T>; 3],
+    /// Pixels whose centres can be inside; the anchor is its top-left.
     pub bounds: Rect,
     inv: i64,
     c0: L,
@@ -100,12 +169,55 @@ pub(crate) fn oriented_edges(v: &[Vertex; 3]) -> Option<([Edge; 3], i64, bool)> 
     ))
 }
 
-impl<L: Lanes> TriangleSetup<L> {
+/// Whether a triangle's edge functions fit `i32` ([`SMALL_EXTENT`]).
+#[inline]
+pub(crate) fn fits_i32(v: &[Vertex; 3]) -> bool {
+    let ext = |c: [i32; 3]| {
+        let (lo, hi) = (c[0].min(c[1]).min(c[2]), c[0].max(c[1]).max(c[2]));
+        (hi as i64 - lo as i64) < SMALL_EXTENT
+    };
+    ext(v.map(|v| v.x.to_bits())) && ext(v.map(|v| v.y.to_bits()))
+}
+
+impl<L: Lanes, T: EdgeInt> TriangleSetup<L, T> {
     /// Sets up a validated triangle; `None` when it has zero area or covers
-    /// no pixel centre.
+    /// no pixel centre. With `T = i32` the caller has checked [`fits_i32`].
+    #[inline(always)]
     pub fn new<F: PixelFormat<Lanes = L>>(v: &[Vertex; 3]) -> Option<Self> {
         let bounds = pixel_bounds(v)?;
-        let (e, area2, swapped) = oriented_edges(v)?;
+        let (p0, mut p1, mut p2) = (sub(&v[0]), sub(&v[1]), sub(&v[2]));
+        let area = |p0: (i64, i64), p1: (i64, i64), p2: (i64, i64)| {
+            let d = |a: i64, b: i64| T::from_i64(a - b);
+            d(p1.0, p0.0) * d(p2.1, p0.1) - d(p1.1, p0.1) * d(p2.0, p0.0)
+        };
+        let mut area2 = area(p0, p1, p2);
+        if area2 == T::ZERO {
+            return None;
+        }
+        let swapped = area2 < T::ZERO;
+        if swapped {
+            core::mem::swap(&mut p1, &mut p2);
+            area2 = -area2;
+        }
+        let half = SUBPIXEL / 2;
+        let anchor = (
+            SUBPIXEL * bounds.x as i64 + half,
+            SUBPIXEL * bounds.y as i64 + half,
+        );
+        let edge = |p: (i64, i64), q: (i64, i64)| {
+            let d = |a: i64, b: i64| T::from_i64(a - b);
+            let (dx, dy) = (d(q.0, p.0), d(q.1, p.1));
+            let top_left = dy < T::ZERO || (dy == T::ZERO && dx > T::ZERO);
+            let s = T::from_i64(SUBPIXEL);
+            EdgeAt {
+                a: -(s * dy),
+                b: dx * d(anchor.1, p.1) - dy * d(anchor.0, p.0),
+                step: s * dx,
+                bias: if top_left { T::ZERO } else { T::ONE },
+            }
+        };
+        let e = [edge(p1, p2), edge(p2, p0), edge(p0, p1)];
+        let area2 = area2.to_i64();
         let (v1, v2) = if swapped {
             (&v[2], &v[1])
         } else {
@@ -124,8 +236,9 @@ impl<L: Lanes> TriangleSetup<L> {
         // larger than the attribute's range only occurs when no two
         // horizontally adjacent pixel centres are inside, so it is never
         // used and clamping it is exact.
+        let (a1, a2) = (e[1].a.to_i64(), e[2].a.to_i64());
         let grad = |d0: i32, d1: i32| {
-            let n = d0 as i64 * e[1].a + d1 as i64 * e[2].a;
+            let n = d0 as i64 * a1 + d1 as i64 * a2;
             div_round(n, area2).clamp(-(1 << 30), 1 << 30) as i32
         };
         let gc = L::from_fn(|i| grad(dc[0].lane(i), dc[1].lane(i)));

@@ -386,6 +386,11 @@ fn frame_and_tile<
     Ok((frame, Box::default()))
 }
 
+/// The simulator's bins: 65,536 (tile, command) entries, 1,024 tiles per
+/// pass (520 KB on the heap). Larger frames take more passes, with the
+/// same output.
+pub type HostBins = tilerast::bin::Bins<65536, 1024>;
+
 /// Renders `cmds` with the tile types given, whatever `cfg` says about
 /// format, planes, dither and coverage (its screen, tile size and clear
 /// values are used): the entry point for sweeps over knobs that are types.
@@ -409,12 +414,13 @@ where
     Rgb888: From<F::Color>,
 {
     let (frame, mut tile) = frame_and_tile::<F, Z, W, D, A, P, G>(cfg)?;
+    let mut bins: Box<HostBins> = Box::default();
     let (w, h) = (cfg.width as u32, cfg.height as u32);
     let mut times: Vec<f64> = (0..runs)
         .map(|_| {
             let start = std::time::Instant::now();
             frame
-                .render_with(&mut tile, cmds, |t| {
+                .render_binned(&mut tile, &mut *bins, cmds, |t| {
                     std::hint::black_box(t.raw(t.area().x, t.area().y));
                     Ok::<(), core::convert::Infallible>(())
                 })
@@ -427,7 +433,7 @@ where
     let mut raw = vec![0u32; (w * h) as usize];
     let mut depth = vec![u16::MAX; (w * h) as usize];
     let stats = frame
-        .render_with(&mut tile, cmds, |t| {
+        .render_binned(&mut tile, &mut *bins, cmds, |t| {
             let a = t.area();
             for y in a.y..a.y + a.h as i32 {
                 for x in a.x..a.x + a.w as i32 {

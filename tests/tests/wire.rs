@@ -133,8 +133,17 @@ fn text_overlay_through_the_tile_draw_target_changes_only_the_label() {
     let mut tile: Box<Tile<2048, Planes<Rgb444Format, Depth16, Wid8, Bayer8>>> = Box::default();
     let mut render = |label: Option<&str>, tile_size: (u16, u16)| {
         let mut screen = Screen(vec![Rgb444::default(); 240 * 240]);
-        tilerast_fw::run_scene(&bytes, &mut tile, tile_size, label, &mut screen, &mut || 0)
-            .unwrap();
+        let mut bins: Box<Bins<4096, 64>> = Box::default();
+        tilerast_fw::run_scene(
+            &bytes,
+            &mut tile,
+            &mut *bins,
+            tile_size,
+            label,
+            &mut screen,
+            &mut || 0,
+        )
+        .unwrap();
         screen.0
     };
     let plain = render(None, (64, 32));

@@ -394,7 +394,7 @@ impl LineSetup {
 
     /// Z at column centres from `c0` on, in 16.14 (the span path adds the
     /// rounding half): floor((z0 len + t dz) 2^14 / len), below 2^50.
-    fn z_walk(&self, c0: i64) -> FloorWalk {
+    fn z_walk(&self, c0: i64) -> FloorWalk<i64> {
         let (len, zs) = (self.b - self.a, 1i64 << Z_FRAC);
         FloorWalk::new(
             (self.z0 * len + self.centre(c0) * self.dz) * zs,

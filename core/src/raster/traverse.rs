@@ -10,23 +10,23 @@
 //! seed's span generation.
 
 use crate::geom::Rect;
-use crate::numeric::div_floor;
-use crate::setup::Edge;
+use crate::setup::{EdgeAt, EdgeInt};
 
 /// `floor(num / den)` as `num` grows by `step` each row (`den > 0`).
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct FloorWalk {
-    pub(crate) q: i64,
-    r: i64,
-    den: i64,
-    sq: i64,
-    sr: i64,
+pub(crate) struct FloorWalk<T> {
+    pub(crate) q: T,
+    r: T,
+    den: T,
+    sq: T,
+    sr: T,
 }
 
-impl FloorWalk {
-    pub(crate) fn new(num: i64, den: i64, step: i64) -> Self {
-        let q = div_floor(num, den);
-        let sq = div_floor(step, den);
+impl<T: EdgeInt> FloorWalk<T> {
+    #[inline(always)]
+    pub(crate) fn new(num: T, den: T, step: T) -> Self {
+        let q = num.div_floor(den);
+        let sq = step.div_floor(den);
         FloorWalk {
             q,
             r: num - q * den,
@@ -36,51 +36,56 @@ impl FloorWalk {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     pub(crate) fn next(&mut self) {
         self.q += self.sq;
         self.r += self.sr;
         if self.r >= self.den {
-            self.r -= self.den;
-            self.q += 1;
+            self.r = self.r - self.den;
+            self.q += T::ONE;
         }
     }
 }
 
 #[derive(Debug, Clone, Copy)]
-enum EdgeRows {
+enum EdgeRows<T> {
     /// Left bound: `px >= -q`.
-    Lower(FloorWalk),
+    Lower(FloorWalk<T>),
     /// Right bound: `px <= q`.
-    Upper(FloorWalk),
+    Upper(FloorWalk<T>),
     /// Horizontal edge: the row is inside iff `num >= 0`.
-    Flat { num: i64, step: i64 },
+    Flat { num: T, step: T },
 }
 
-impl EdgeRows {
-    fn new(e: &Edge, py: i64) -> Self {
-        let num = e.row(py) - e.bias;
-        match e.a {
-            a if a > 0 => EdgeRows::Lower(FloorWalk::new(num, a, e.step)),
-            a if a < 0 => EdgeRows::Upper(FloorWalk::new(num, -a, e.step)),
-            _ => EdgeRows::Flat { num, step: e.step },
+impl<T: EdgeInt> EdgeRows<T> {
+    /// The edge's bound on rows from `y0` on, in pixels right of the
+    /// anchor column.
+    #[inline(always)]
+    fn new(e: &EdgeAt<T>, dy0: T) -> Self {
+        let num = e.b + e.step * dy0 - e.bias;
+        if e.a > T::ZERO {
+            EdgeRows::Lower(FloorWalk::new(num, e.a, e.step))
+        } else if e.a < T::ZERO {
+            EdgeRows::Upper(FloorWalk::new(num, -e.a, e.step))
+        } else {
+            EdgeRows::Flat { num, step: e.step }
         }
     }
 
-    #[inline]
-    fn clip(&self, lo: &mut i64, hi: &mut i64) {
+    #[inline(always)]
+    fn clip(&self, lo: &mut T, hi: &mut T) {
         match self {
             EdgeRows::Lower(w) => *lo = (*lo).max(-w.q),
-            EdgeRows::Upper(w) => *hi = (*hi).min(w.q + 1),
+            EdgeRows::Upper(w) => *hi = (*hi).min(w.q + T::ONE),
             EdgeRows::Flat { num, .. } => {
-                if *num < 0 {
+                if *num < T::ZERO {
                     *hi = *lo;
                 }
             }
         }
     }
 
-    #[inline]
+    #[inline(always)]
     fn next(&mut self) {
         match self {
             EdgeRows::Lower(w) | EdgeRows::Upper(w) => w.next(),
@@ -94,8 +99,13 @@ impl EdgeRows {
 /// point — its first covered pixel at or right of `min(clip.x, 0)`, which does
 /// not depend on how the screen is cut into tiles — and `e1`, `e2` are the
 /// unbiased values of edges 1 and 2 at `(xr, py)`.
-pub(crate) fn for_each_span(
-    e: &[Edge; 3],
+///
+/// Edge values are kept relative to the anchor, the top-left pixel of the
+/// triangle's `bounds`: in `T = i32` whenever the triangle's box allows
+/// ([`crate::setup`]), with exactly the values `i64` would give.
+#[inline(always)]
+pub(crate) fn for_each_span<T: EdgeInt>(
+    e: &[EdgeAt<T>; 3],
     bounds: &Rect,
     clip: &Rect,
     mut f: impl FnMut(i64, i64, i64, i64, i64, i64),
@@ -103,38 +113,47 @@ pub(crate) fn for_each_span(
     let Some(r) = bounds.intersect(clip) else {
         return;
     };
+    let (ax, ay) = (bounds.x as i64, bounds.y as i64);
     let (y0, y1) = (r.y as i64, r.y1());
-    let left = (bounds.x as i64).max((clip.x as i64).min(0));
+    // In anchor-relative pixels: the restart floor, the box's right end and
+    // the clip's columns.
+    let left = T::from_i64((clip.x as i64).min(0).max(ax) - ax);
+    let right = T::from_i64(bounds.w as i64);
+    let (cx0, cx1) = (T::from_i64(r.x as i64 - ax), T::from_i64(r.x1() - ax));
+    let mut dy = T::from_i64(y0 - ay);
     let mut rows = [
-        EdgeRows::new(&e[0], y0),
-        EdgeRows::new(&e[1], y0),
-        EdgeRows::new(&e[2], y0),
+        EdgeRows::new(&e[0], dy),
+        EdgeRows::new(&e[1], dy),
+        EdgeRows::new(&e[2], dy),
     ];
     for py in y0..y1 {
-        let (mut lo, mut hi) = (left, bounds.x1());
+        let (mut lo, mut hi) = (left, right);
         for row in &rows {
             row.clip(&mut lo, &mut hi);
         }
-        let (x0, x1) = (lo.max(clip.x as i64), hi.min(clip.x1()));
+        let (x0, x1) = (lo.max(cx0), hi.min(cx1));
         if x0 < x1 {
+            let at = |e: &EdgeAt<T>| (e.a * lo + e.b + e.step * dy).to_i64();
             f(
                 py,
-                lo,
-                x0,
-                x1,
-                e[1].a * lo + e[1].row(py),
-                e[2].a * lo + e[2].row(py),
+                ax + lo.to_i64(),
+                ax + x0.to_i64(),
+                ax + x1.to_i64(),
+                at(&e[1]),
+                at(&e[2]),
             );
         }
         for row in &mut rows {
             row.next();
         }
+        dy += T::ONE;
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::numeric::div_floor;
     #[test]
     fn floor_walk_matches_division() {
         for &(num, den, step) in &[
@@ -144,10 +163,66 @@ mod tests {
             (-1, 16, 16),
         ] {
             let mut w = FloorWalk::new(num, den, step);
+            let mut w32 = FloorWalk::new(num as i32, den as i32, step as i32);
             for k in 0..50 {
                 assert_eq!(w.q, div_floor(num + k * step, den));
+                assert_eq!(w32.q as i64, w.q);
+                w32.next();
                 w.next();
             }
         }
+    }
+
+    #[test]
+    fn i32_and_i64_edges_give_the_same_spans() {
+        use crate::command::Vertex;
+        use crate::format::{Rgb, Rgb565Format};
+        use crate::numeric::Coord;
+        use crate::setup::{fits_i32, TriangleSetup};
+        let mut seed = 0x1234_5678_9abc_def0u64;
+        let mut rnd = |lo: i64, hi: i64| {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            lo + ((seed >> 33) as i64 % (hi - lo))
+        };
+        let mut checked = 0;
+        for _ in 0..3000 {
+            let (cx, cy) = (rnd(-2000, 6000), rnd(-2000, 6000));
+            let r = [8, 200, 4000, 16383][rnd(0, 4) as usize];
+            let v: [Vertex; 3] = core::array::from_fn(|_| {
+                Vertex::new(
+                    Coord::from_bits((cx + rnd(-r / 2, r / 2)) as i32),
+                    Coord::from_bits((cy + rnd(-r / 2, r / 2)) as i32),
+                    7,
+                    Rgb::new(1, 2, 3),
+                )
+            });
+            if !fits_i32(&v) {
+                continue;
+            }
+            let a = TriangleSetup::<_, i32>::new::<Rgb565Format>(&v);
+            let b = TriangleSetup::<_, i64>::new::<Rgb565Format>(&v);
+            let (Some(a), Some(b)) = (a, b) else {
+                assert!(a.is_none() && b.is_none());
+                continue;
+            };
+            assert_eq!((a.gc, a.gz), (b.gc, b.gz));
+            let clip = Rect::new(rnd(-100, 300) as i32, rnd(-100, 300) as i32, 64, 32);
+            let mut sa = [0i64; 6 * 64];
+            let mut sb = [0i64; 6 * 64];
+            let (mut na, mut nb) = (0, 0);
+            for_each_span(&a.e, &a.bounds, &clip, |py, xr, x0, x1, e1, e2| {
+                sa[na..na + 6].copy_from_slice(&[py, xr, x0, x1, e1, e2]);
+                na += 6;
+            });
+            for_each_span(&b.e, &b.bounds, &clip, |py, xr, x0, x1, e1, e2| {
+                sb[nb..nb + 6].copy_from_slice(&[py, xr, x0, x1, e1, e2]);
+                nb += 6;
+            });
+            assert_eq!(sa[..na], sb[..nb]);
+            checked += na;
+        }
+        assert!(checked > 1000);
     }
 }

@@ -21,7 +21,7 @@ use crate::numeric::{Precision, COLOR_FRAC, SUBPIXEL as SUBPIXEL_I64, Z_FRAC};
 use crate::raster::coverage::{AaMode, AaPlane};
 use crate::raster::span::SpanStart;
 use crate::raster::traverse::for_each_span;
-use crate::setup::TriangleSetup;
+use crate::setup::{fits_i32, EdgeInt, TriangleSetup};
 
 impl<const N: usize, C, F, Z, W, D, A, P> Tile<N, C>
 where
@@ -88,7 +88,11 @@ where
         }
         match cmd {
             Command::Triangle { v, state } => {
-                if let Some(t) = TriangleSetup::new::<F>(v) {
+                if fits_i32(v) {
+                    if let Some(t) = TriangleSetup::<_, i32>::new::<F>(v) {
+                        self.triangle(&t, state);
+                    }
+                } else if let Some(t) = TriangleSetup::<_, i64>::new::<F>(v) {
                     self.triangle(&t, state);
                 }
             }
@@ -108,7 +112,8 @@ where
         }
     }
 
-    fn triangle(&mut self, t: &TriangleSetup<F::Lanes>, st: &State) {
+    #[inline(always)]
+    fn triangle<T: EdgeInt>(&mut self, t: &TriangleSetup<F::Lanes, T>, st: &State) {
         let area = self.area;
         for_each_span(&t.e, &t.bounds, &area, |py, xr, x0, x1, e1, e2| {
             // Restart from the plane equation at xr, then advance to x0 by
@@ -283,7 +288,7 @@ where
 
     /// Draws `n >= 1` pixels from screen `(x, y)`, which the caller has
     /// clipped to this tile.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn span(&mut self, x: i64, y: i64, n: i64, s: SpanStart<F::Lanes>, st: &State) {
         let a = self.area;
         let idx = ((y - a.y as i64) * a.w as i64 + (x - a.x as i64)) as usize;

@@ -58,13 +58,16 @@ fn stack_used() -> usize {
 
 #[cfg(feature = "demo")]
 static DEMO: &[u8] = include_bytes!(concat!(env!("TILERAST_SCENES"), "/demo.bin"));
+#[cfg(feature = "teapot")]
+static TEAPOT: &[u8] = include_bytes!(concat!(env!("TILERAST_SCENES"), "/teapot.bin"));
 #[cfg(feature = "ssd1306")]
 static SSD1306: &[u8] = include_bytes!(concat!(env!("TILERAST_SCENES"), "/ssd1306.bin"));
 
 /// Runs the report and exits QEMU. `ND`/`NS` are the tile capacities (in
 /// groups of 8 pixels) for the demo and SSD1306 scenes, rendered in tiles of
-/// `demo_tile` and `ssd_tile`.
-pub fn run<const ND: usize, const NS: usize>(
+/// `demo_tile` and `ssd_tile` (the teapot in the demo's); `BC`/`BT` the bins'
+/// entries and tiles per pass.
+pub fn run<const ND: usize, const NS: usize, const BC: usize, const BT: usize>(
     b: &Board,
     demo_tile: (u16, u16),
     ssd_tile: (u16, u16),
@@ -95,11 +98,15 @@ pub fn run<const ND: usize, const NS: usize>(
             b.name, b.cpu, b.instr_per_tick
         )?;
         #[cfg(feature = "demo")]
-        crate::report::report_scene::<crate::report::Demo, ND>(
+        crate::report::report_scene::<crate::report::Demo, ND, BC, BT>(
             DEMO, demo_tile, &mut out, &mut clock,
         )?;
+        #[cfg(feature = "teapot")]
+        crate::report::report_scene::<crate::report::Teapot, ND, BC, BT>(
+            TEAPOT, demo_tile, &mut out, &mut clock,
+        )?;
         #[cfg(feature = "ssd1306")]
-        crate::report::report_scene::<crate::report::Ssd1306, NS>(
+        crate::report::report_scene::<crate::report::Ssd1306, NS, BC, BT>(
             SSD1306, ssd_tile, &mut out, &mut clock,
         )?;
         #[cfg(feature = "bench")]

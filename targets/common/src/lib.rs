@@ -66,12 +66,13 @@ pub struct SceneRun {
 pub type RunError<E> = FlushError<E>;
 
 /// Renders an encoded scene into tiles of `tile` size with a tile buffer of
-/// configuration `C` (checked against the scene header), draws `label` (if
+/// configuration `C` (checked against the scene header) and `bins`, draws `label` (if
 /// any) at the top left of the screen on every tile, and flushes each tile to
 /// `target`.
-pub fn run_scene<const N: usize, C, T>(
+pub fn run_scene<const N: usize, C, T, const BC: usize, const BT: usize>(
     scene: &[u8],
     tile_buf: &mut Tile<N, C>,
+    bins: &mut Bins<BC, BT>,
     tile: (u16, u16),
     label: Option<&str>,
     target: &mut T,
@@ -91,7 +92,7 @@ where
         ..SceneRun::default()
     };
     clock.lap();
-    let stats = frame.render_with(tile_buf, &cmds, |t| {
+    let stats = frame.render_binned(tile_buf, bins, &cmds, |t| {
         run.raster_ticks += clock.lap() as u64;
         if let Some(text) = label {
             let style = MonoTextStyle::new(&FONT_6X10, white);

@@ -28,6 +28,15 @@ impl SceneKind for Demo {
     const LABEL: Option<&'static str> = Some("tilerast");
 }
 
+/// `scenes/teapot.toml`: the teapot alone, RGB565 + 16-bit Z, Gouraud, no
+/// dither: the frame the issue tracker compares with the C++ MCU libraries.
+pub struct Teapot;
+impl SceneKind for Teapot {
+    type C = Planes<Rgb565Format, Depth16, NoWid, NoDither>;
+    const NAME: &'static str = "teapot";
+    const LABEL: Option<&'static str> = None;
+}
+
 /// `scenes/ssd1306.toml`: 1 bit per pixel, Z, 4x4 dither.
 pub struct Ssd1306;
 impl SceneKind for Ssd1306 {
@@ -38,7 +47,7 @@ impl SceneKind for Ssd1306 {
 
 /// Renders scene `K` in tiles of `tile` (at most `8 N` pixels) into a
 /// [`CrcTarget`]: the CRC of the pixel stream and the run's costs.
-pub fn scene_crc<K: SceneKind, const N: usize>(
+pub fn scene_crc<K: SceneKind, const N: usize, const BC: usize, const BT: usize>(
     scene: &[u8],
     tile: (u16, u16),
     clock: &mut impl Clock,
@@ -52,12 +61,23 @@ where
         Size::new(h.width as u32, h.height as u32),
     );
     let mut buf: Tile<N, K::C> = Tile::new();
-    let run = run_scene(scene, &mut buf, tile, K::LABEL, &mut target, clock)?;
+    let mut bins: Bins<BC, BT> = Bins::new();
+    let run = run_scene(
+        scene,
+        &mut buf,
+        &mut bins,
+        tile,
+        K::LABEL,
+        &mut target,
+        clock,
+    )?;
     Ok((target.crc(), run))
 }
 
-/// Prints `scene NAME tile WxH crc 0x... pixels P raster_ticks R flush_ticks F replayed C`.
-pub fn report_scene<K: SceneKind, const N: usize>(
+/// Prints `scene NAME tile WxH crc 0x... pixels P raster_ticks R flush_ticks F
+/// replayed C bin_passes B bin_peak E unbinned U`, rendered with bins of
+/// `BC` entries for `BT` tiles.
+pub fn report_scene<K: SceneKind, const N: usize, const BC: usize, const BT: usize>(
     scene: &[u8],
     tile: (u16, u16),
     out: &mut impl Write,
@@ -67,11 +87,21 @@ where
     <<K::C as TileConfig>::Format as PixelFormat>::Color: IntoStorage,
     <<<K::C as TileConfig>::Format as PixelFormat>::Color as IntoStorage>::Storage: Into<u32>,
 {
-    match scene_crc::<K, N>(scene, tile, clock) {
+    match scene_crc::<K, N, BC, BT>(scene, tile, clock) {
         Ok((crc, r)) => writeln!(
             out,
-            "scene {} tile {}x{} crc 0x{crc:08x} pixels {} raster_ticks {} flush_ticks {} replayed {}",
-            K::NAME, tile.0, tile.1, r.pixels, r.raster_ticks, r.flush_ticks, r.stats.replayed
+            "scene {} tile {}x{} crc 0x{crc:08x} pixels {} raster_ticks {} flush_ticks {} \
+             replayed {} bin_passes {} bin_peak {} unbinned {}",
+            K::NAME,
+            tile.0,
+            tile.1,
+            r.pixels,
+            r.raster_ticks,
+            r.flush_ticks,
+            r.stats.replayed,
+            r.stats.bin_passes,
+            r.stats.bin_peak,
+            r.stats.unbinned_tiles
         ),
         Err(e) => writeln!(out, "scene {} error {e}", K::NAME),
     }

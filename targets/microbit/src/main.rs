@@ -15,6 +15,9 @@ use tilerast_fw::board::{run, Board};
 const DEMO_TILE: (u16, u16) = (32, 32);
 const SSD_TILE: (u16, u16) = (128, 16);
 
+/// Bin entries: 256 x 8 bytes, all the 16 KB leave beside the tile and stack.
+const BIN_ENTRIES: usize = 256;
+
 #[cortex_m_rt::entry]
 fn main() -> ! {
     let board = Board {
@@ -22,5 +25,5 @@ fn main() -> ! {
         cpu: "cortex-m0",
         instr_per_tick: "62.5",
     };
-    run::<{ 32 * 32 / 8 }, { 128 * 16 / 8 }>(&board, DEMO_TILE, SSD_TILE)
+    run::<{ 32 * 32 / 8 }, { 128 * 16 / 8 }, BIN_ENTRIES, 64>(&board, DEMO_TILE, SSD_TILE)
 }

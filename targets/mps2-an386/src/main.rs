@@ -14,6 +14,9 @@ use tilerast_fw::board::{run, Board};
 const DEMO_TILE: (u16, u16) = (64, 32);
 const SSD_TILE: (u16, u16) = (128, 16);
 
+/// Bin entries (8 bytes each): enough for the teapot frame in one pass.
+const BIN_ENTRIES: usize = 12288;
+
 #[cortex_m_rt::entry]
 fn main() -> ! {
     let board = Board {
@@ -21,5 +24,5 @@ fn main() -> ! {
         cpu: "cortex-m4f",
         instr_per_tick: "40",
     };
-    run::<{ 64 * 32 / 8 }, { 128 * 16 / 8 }>(&board, DEMO_TILE, SSD_TILE)
+    run::<{ 64 * 32 / 8 }, { 128 * 16 / 8 }, BIN_ENTRIES, 32>(&board, DEMO_TILE, SSD_TILE)
 }

@@ -1,0 +1,87 @@
+//! Binning cannot change a pixel: a frame rendered through bins of any
+//! capacity — ample, too small for the frame (bands, more passes), too small
+//! for one tile (that tile replays the whole list), or none — equals the
+//! frame rendered without bins, for display lists in RAM and encoded in
+//! flash alike.
+
+use proptest::prelude::*;
+use tilerast::prelude::*;
+use tilerast::wire::SceneHeader;
+use tilerast_sim::Scene;
+use tilerast_tests::{random_command, scene, Rng};
+
+type DemoTile = Tile<{ groups(64, 32) }, Planes<Rgb444Format, Depth16, Wid8, Bayer8>>;
+
+/// The frame's packed pixels, row-major, and what rendering did.
+fn frame_raw<const N: usize, C: TileConfig, S, const CAP: usize, const TB: usize>(
+    frame: &Frame,
+    cmds: &S,
+) -> (Vec<u32>, FrameStats)
+where
+    S: CommandSource + ?Sized,
+{
+    let mut tile: Box<Tile<N, C>> = Box::default();
+    let mut bins: Box<Bins<CAP, TB>> = Box::default();
+    let s = frame.screen();
+    let mut out = vec![0u32; s.area() as usize];
+    let stats = frame
+        .render_binned(&mut tile, &mut *bins, cmds, |t| {
+            let a = t.area();
+            for y in a.y..a.y + a.h as i32 {
+                for x in a.x..a.x + a.w as i32 {
+                    out[(y as u32 * s.w + x as u32) as usize] = t.raw(x, y).unwrap();
+                }
+            }
+            Ok::<(), ()>(())
+        })
+        .unwrap();
+    (out, stats)
+}
+
+#[test]
+fn the_demo_from_flash_is_the_same_through_any_bins() {
+    let bytes = Scene::load(scene("demo.toml")).unwrap().encode().unwrap();
+    let (h, cmds) = SceneHeader::parse(&bytes).unwrap();
+    let mut frame = h.frame((64, 32)).unwrap();
+    frame.clear = h.clear;
+    let (plain, none) = frame_raw::<256, DemoTileConfig, _, 0, 0>(&frame, &cmds);
+    assert_eq!((none.bin_passes, none.unbinned_tiles), (0, 32));
+    // Ample: one pass.
+    let (raw, st) = frame_raw::<256, DemoTileConfig, _, 16384, 32>(&frame, &cmds);
+    assert_eq!(raw, plain);
+    assert_eq!((st.bin_passes, st.unbinned_tiles), (1, 0));
+    assert_eq!(st.replayed, none.replayed, "the same (tile, command) pairs");
+    // Too small for the frame: bands.
+    let (raw, st) = frame_raw::<256, DemoTileConfig, _, 2048, 32>(&frame, &cmds);
+    assert_eq!(raw, plain);
+    assert!(st.bin_passes > 2 && st.unbinned_tiles == 0, "{st:?}");
+    // Too small for some tiles alone: those replay the whole list.
+    let (raw, st) = frame_raw::<256, DemoTileConfig, _, 64, 4>(&frame, &cmds);
+    assert_eq!(raw, plain);
+    assert!(st.unbinned_tiles > 0 && st.unbinned_tiles < 32, "{st:?}");
+}
+
+type DemoTileConfig = Planes<Rgb444Format, Depth16, Wid8, Bayer8>;
+
+#[test]
+fn the_demo_tile_type_holds_a_demo_tile() {
+    assert_eq!(DemoTile::CAPACITY, 64 * 32);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(tilerast_tests::cases(32)))]
+    #[test]
+    fn random_lists_are_the_same_through_any_bins(seed in any::<u64>(), tw in 1u16..40, th in 1u16..40, n in 0usize..40) {
+        let mut rng = Rng::new(seed);
+        let cmds: Vec<Command> = (0..n).map(|_| random_command(&mut rng, 0)).collect();
+        let frame = Frame::new(100, 80, tw, th).unwrap();
+        type C = Planes<Rgb888Format, Depth16, NoWid, Bayer4>;
+        let (plain, _) = frame_raw::<200, C, _, 0, 0>(&frame, &cmds[..]);
+        let (a, _) = frame_raw::<200, C, _, 4096, 256>(&frame, &cmds[..]);
+        let (b, _) = frame_raw::<200, C, _, 7, 3>(&frame, &cmds[..]);
+        let (c, _) = frame_raw::<200, C, _, 1, 1>(&frame, &cmds[..]);
+        prop_assert_eq!(&a, &plain);
+        prop_assert_eq!(&b, &plain);
+        prop_assert_eq!(&c, &plain);
+    }
+}
