@@ -6,10 +6,10 @@
 //!
 //! **Memory is the user's choice.** [`Bins<CAP, TILES>`](Bins) holds `CAP`
 //! (tile, command) entries and the lists of `TILES` tiles, in
-//! `8 CAP + 12 TILES` bytes, with no allocation. A frame whose entries do not
+//! `8 CAP + 16 TILES` bytes, with no allocation. A frame whose entries do not
 //! fit is still rendered, correctly: the pass that overflows still counts
-//! each tile's entries, the frame is split into bands of tiles that fit,
-//! each binned by one more pass over the commands, and a single tile that
+//! each tile's entries, and from those counts its tiles are cut into bands
+//! that fit, each binned by one more pass over the commands, and a single tile that
 //! alone overflows the bins replays the whole list (the unbinned path). [`FrameStats`](crate::frame::FrameStats) counts both. `Bins<0, 0>`
 //! costs nothing and always takes the unbinned path.
 //!
@@ -29,14 +29,17 @@ const NONE: u32 = u32::MAX;
 /// ```
 /// use tilerast::prelude::*;
 /// use tilerast::bin::Bins;
-/// // 2048 (tile, command) entries and up to 32 tiles per pass: 16.8 KB.
+/// // 2048 (tile, command) entries and up to 32 tiles per pass: 16.9 KB.
 /// static BINS: Bins<2048, 32> = Bins::new();
-/// assert_eq!(Bins::<2048, 32>::BYTES, 8 * 2048 + 12 * 32);
+/// assert_eq!(Bins::<2048, 32>::BYTES, 8 * 2048 + 16 * 32);
 /// ```
 #[derive(Debug, Clone)]
 pub struct Bins<const CAP: usize, const TILES: usize> {
     /// Entries each tile asked for in the last pass, stored or not.
     count: [u32; TILES],
+    /// The counts of the last pass that overflowed: the plan its window's
+    /// bands are cut from.
+    plan: [u32; TILES],
     head: [u32; TILES],
     tail: [u32; TILES],
     key: [u32; CAP],
@@ -52,12 +55,13 @@ impl<const CAP: usize, const TILES: usize> Default for Bins<CAP, TILES> {
 
 impl<const CAP: usize, const TILES: usize> Bins<CAP, TILES> {
     /// Bytes the bins occupy.
-    pub const BYTES: usize = 8 * CAP + 12 * TILES;
+    pub const BYTES: usize = 8 * CAP + 16 * TILES;
 
     /// Empty bins (`const`: they can be a `static`).
     pub const fn new() -> Self {
         Bins {
             count: [0; TILES],
+            plan: [0; TILES],
             head: [NONE; TILES],
             tail: [NONE; TILES],
             key: [0; CAP],
@@ -104,10 +108,15 @@ impl<const CAP: usize, const TILES: usize> Bins<CAP, TILES> {
         true
     }
 
-    /// How many of the first tiles of the last pass fit the bins together.
-    pub(crate) fn fitting(&self, tiles: usize) -> usize {
+    /// Keeps the last pass's counts of its first `tiles` tiles as the plan.
+    pub(crate) fn keep_plan(&mut self, tiles: usize) {
+        self.plan[..tiles].copy_from_slice(&self.count[..tiles]);
+    }
+
+    /// How many planned tiles from `from` (of `len`) fit the bins together.
+    pub(crate) fn plan_fit(&self, from: usize, len: usize) -> usize {
         let mut sum = 0usize;
-        self.count[..tiles]
+        self.plan[from..from + len]
             .iter()
             .take_while(|&&c| {
                 sum += c as usize;

@@ -12,8 +12,8 @@ use crate::geom::Rect;
 use crate::list::DisplayList;
 use crate::numeric::MAX_SIDE;
 use crate::raster::coverage::AaMode;
-pub use crate::tile::Clear;
 use crate::tile::Tile;
+pub use crate::tile::{Clear, Phase};
 use embedded_graphics_core::draw_target::DrawTarget;
 
 /// What rendering a frame did.
@@ -211,6 +211,66 @@ impl Frame {
         tile: &mut Tile<N, C>,
         bins: &mut Bins<CAP, TB>,
         cmds: &S,
+        done: impl FnMut(&mut Tile<N, C>) -> Result<(), E>,
+    ) -> Result<FrameStats, FlushError<E>>
+    where
+        S: CommandSource + ?Sized,
+    {
+        self.render_upto::<{ Phase::ALL }, N, C, S, E, CAP, TB>(tile, bins, cmds, done)
+    }
+
+    /// [`Frame::render_binned`] stopped after `phase` ([`Phase`]): for
+    /// measuring where a frame's time goes. Tiles are handed to `done`
+    /// only with [`Phase::All`]; before it nothing is drawn.
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// type T = Tile<{ groups(16, 16) }, Rgb565Format>;
+    /// let frame = T::frame::<16, 16>(32, 32)?;
+    /// let list = [Command::fill(Rect::new(0, 0, 20, 20), Rgb::new(9, 9, 9))];
+    /// let (mut tile, mut bins) = (T::new(), Bins::<16, 4>::new());
+    /// let mut flushed = 0;
+    /// for phase in [Phase::Bin, Phase::Clear, Phase::Setup, Phase::All] {
+    ///     frame.render_until(phase, &mut tile, &mut bins, &list[..], |_| { flushed += 1; Ok::<(), ()>(()) })
+    ///         .map_err(|_| Error::BadSize)?;
+    /// }
+    /// assert_eq!(flushed, 4); // only the last run flushed its 4 tiles
+    /// # Ok::<(), Error>(())
+    /// ```
+    pub fn render_until<const N: usize, C: TileConfig, S, E, const CAP: usize, const TB: usize>(
+        &self,
+        phase: Phase,
+        tile: &mut Tile<N, C>,
+        bins: &mut Bins<CAP, TB>,
+        cmds: &S,
+        done: impl FnMut(&mut Tile<N, C>) -> Result<(), E>,
+    ) -> Result<FrameStats, FlushError<E>>
+    where
+        S: CommandSource + ?Sized,
+    {
+        match phase {
+            Phase::Bin => self.render_upto::<0, N, C, S, E, CAP, TB>(tile, bins, cmds, done),
+            Phase::Clear => self.render_upto::<1, N, C, S, E, CAP, TB>(tile, bins, cmds, done),
+            Phase::Decode => self.render_upto::<2, N, C, S, E, CAP, TB>(tile, bins, cmds, done),
+            Phase::Setup => self.render_upto::<3, N, C, S, E, CAP, TB>(tile, bins, cmds, done),
+            Phase::Traverse => self.render_upto::<4, N, C, S, E, CAP, TB>(tile, bins, cmds, done),
+            Phase::All => self.render_binned(tile, bins, cmds, done),
+        }
+    }
+
+    fn render_upto<
+        const UPTO: u8,
+        const N: usize,
+        C: TileConfig,
+        S,
+        E,
+        const CAP: usize,
+        const TB: usize,
+    >(
+        &self,
+        tile: &mut Tile<N, C>,
+        bins: &mut Bins<CAP, TB>,
+        cmds: &S,
         mut done: impl FnMut(&mut Tile<N, C>) -> Result<(), E>,
     ) -> Result<FrameStats, FlushError<E>>
     where
@@ -231,14 +291,20 @@ impl Frame {
         if !enabled {
             cmds.validate()?;
         }
-        // A band of tiles known to fit the bins (from an overflowing pass).
-        let mut fits: Option<u32> = None;
+        // The window of tiles an overflowing pass counted: (first, len).
+        let mut plan: Option<(u32, u32)> = None;
         let mut t0 = 0;
         while t0 < count {
-            let band = fits.take().unwrap_or((TB as u32).min(count - t0));
+            let planned = plan.filter(|&(base, len)| t0 < base + len);
+            let band = match planned {
+                Some((base, len)) => {
+                    bins.plan_fit((t0 - base) as usize, (base + len - t0) as usize) as u32
+                }
+                None => (TB as u32).min(count - t0),
+            };
             let t1 = t0 + band;
             let mut binned = false;
-            if enabled {
+            if enabled && band > 0 {
                 bins.reset(band as usize);
                 let mut full = false;
                 cmds.each_keyed(|key, cmd| {
@@ -256,39 +322,55 @@ impl Frame {
                 })?;
                 stats.bin_passes += 1;
                 stats.bin_peak = stats.bin_peak.max(bins.len() as u32);
-                if full {
-                    // Bin the tiles that fit together in one more pass; a
-                    // tile that alone overflows replays the whole list.
-                    let k = bins.fitting(band as usize) as u32;
-                    if k > 0 {
-                        fits = Some(k);
-                        continue;
-                    }
-                } else {
+                if !full {
                     binned = true;
+                } else if planned.is_none() {
+                    // Cut this window into bands that fit, from its counts;
+                    // a tile that alone overflows replays the whole list.
+                    bins.keep_plan(band as usize);
+                    plan = Some((t0, band));
+                    continue;
                 }
             }
             let last = if binned { t1 } else { t0 + 1 };
             for t in t0..last {
+                if UPTO == Phase::Bin as u8 {
+                    break;
+                }
                 let area = self.tile_rect(&g, t);
                 tile.begin(area, &self.clear)?;
+                if UPTO == Phase::Clear as u8 {
+                    continue;
+                }
                 let mut replay = |tile: &mut Tile<N, C>| {
-                    if binned {
-                        cmds.replay(bins.keys((t - t0) as usize), |cmd| {
+                    let mut draw = |cmd: &Command| {
+                        if UPTO == Phase::Decode as u8 {
+                            core::hint::black_box(cmd);
+                        } else if UPTO == Phase::ALL {
+                            // One out-of-line call per command: inlined
+                            // here, the whole pipeline in one function
+                            // spilled more than the call costs (measured).
                             tile.draw_valid(cmd);
-                            stats.replayed += 1;
-                        });
+                        } else {
+                            tile.draw_upto::<UPTO>(cmd);
+                        }
+                        stats.replayed += 1;
+                    };
+                    if binned {
+                        cmds.replay(bins.keys((t - t0) as usize), draw);
                     } else {
                         // Validated already: no error can come back.
                         let _ = cmds.each(|cmd| {
                             if bounds(cmd).and_then(|b| b.intersect(&area)).is_some() {
-                                tile.draw_valid(cmd);
-                                stats.replayed += 1;
+                                draw(cmd);
                             }
                         });
                     }
                 };
                 replay(tile);
+                if UPTO < Phase::ALL {
+                    continue;
+                }
                 // With coverage antialiasing: resolve, then spans and lines
                 // over the resolved pixels.
                 if tile.finish() {

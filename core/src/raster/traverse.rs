@@ -94,59 +94,103 @@ impl<T: EdgeInt> EdgeRows<T> {
     }
 }
 
-/// Calls `f(py, xr, x0, x1, e1, e2)` for every row of `clip` the triangle
-/// covers: the covered pixels are `x0..x1`; `xr <= x0` is the row's restart
-/// point — its first covered pixel at or right of `min(clip.x, 0)`, which does
-/// not depend on how the screen is cut into tiles — and `e1`, `e2` are the
-/// unbiased values of edges 1 and 2 at `(xr, py)`.
+/// One covered row of a triangle inside a clip rectangle ([`Spans`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Row {
+    /// The row.
+    pub py: i64,
+    /// The restart point: the row's first covered pixel at or right of
+    /// `min(clip.x, 0)`, which does not depend on how the screen is cut
+    /// into tiles (`xr <= x0`).
+    pub xr: i64,
+    /// First covered pixel inside the clip.
+    pub x0: i64,
+    /// One past the last.
+    pub x1: i64,
+    /// Unbiased value of edge 1 at `(xr, py)`.
+    pub e1: i64,
+    /// Unbiased value of edge 2 at `(xr, py)`.
+    pub e2: i64,
+}
+
+/// The rows of `clip` a triangle covers, top to bottom: a small pure
+/// iterator, so the span loop runs inline in the caller's `for`.
 ///
 /// Edge values are kept relative to the anchor, the top-left pixel of the
 /// triangle's `bounds`: in `T = i32` whenever the triangle's box allows
 /// ([`crate::setup`]), with exactly the values `i64` would give.
-#[inline(always)]
-pub(crate) fn for_each_span<T: EdgeInt>(
-    e: &[EdgeAt<T>; 3],
-    bounds: &Rect,
-    clip: &Rect,
-    mut f: impl FnMut(i64, i64, i64, i64, i64, i64),
-) {
-    let Some(r) = bounds.intersect(clip) else {
-        return;
-    };
-    let (ax, ay) = (bounds.x as i64, bounds.y as i64);
-    let (y0, y1) = (r.y as i64, r.y1());
-    // In anchor-relative pixels: the restart floor, the box's right end and
-    // the clip's columns.
-    let left = T::from_i64((clip.x as i64).min(0).max(ax) - ax);
-    let right = T::from_i64(bounds.w as i64);
-    let (cx0, cx1) = (T::from_i64(r.x as i64 - ax), T::from_i64(r.x1() - ax));
-    let mut dy = T::from_i64(y0 - ay);
-    let mut rows = [
-        EdgeRows::new(&e[0], dy),
-        EdgeRows::new(&e[1], dy),
-        EdgeRows::new(&e[2], dy),
-    ];
-    for py in y0..y1 {
-        let (mut lo, mut hi) = (left, right);
-        for row in &rows {
-            row.clip(&mut lo, &mut hi);
+#[derive(Debug, Clone)]
+pub(crate) struct Spans<'a, T> {
+    e: &'a [EdgeAt<T>; 3],
+    rows: [EdgeRows<T>; 3],
+    ax: i64,
+    py: i64,
+    y1: i64,
+    dy: T,
+    left: T,
+    right: T,
+    cx0: T,
+    cx1: T,
+}
+
+impl<'a, T: EdgeInt> Spans<'a, T> {
+    #[inline(always)]
+    pub(crate) fn new(e: &'a [EdgeAt<T>; 3], bounds: &Rect, clip: &Rect) -> Self {
+        let r = bounds.intersect(clip).unwrap_or(Rect::new(0, 0, 0, 0));
+        let (ax, ay) = (bounds.x as i64, bounds.y as i64);
+        let (y0, y1) = (r.y as i64, r.y as i64 + r.h as i64);
+        let dy = T::from_i64(y0 - ay);
+        Spans {
+            e,
+            rows: [
+                EdgeRows::new(&e[0], dy),
+                EdgeRows::new(&e[1], dy),
+                EdgeRows::new(&e[2], dy),
+            ],
+            ax,
+            py: y0,
+            y1,
+            dy,
+            // In anchor-relative pixels: the restart floor, the box's right
+            // end and the clip's columns.
+            left: T::from_i64((clip.x as i64).min(0).max(ax) - ax),
+            right: T::from_i64(bounds.w as i64),
+            cx0: T::from_i64(r.x as i64 - ax),
+            cx1: T::from_i64(r.x1() - ax),
         }
-        let (x0, x1) = (lo.max(cx0), hi.min(cx1));
-        if x0 < x1 {
-            let at = |e: &EdgeAt<T>| (e.a * lo + e.b + e.step * dy).to_i64();
-            f(
-                py,
-                ax + lo.to_i64(),
-                ax + x0.to_i64(),
-                ax + x1.to_i64(),
-                at(&e[1]),
-                at(&e[2]),
-            );
+    }
+}
+
+impl<T: EdgeInt> Iterator for Spans<'_, T> {
+    type Item = Row;
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<Row> {
+        while self.py < self.y1 {
+            let (mut lo, mut hi) = (self.left, self.right);
+            for row in &self.rows {
+                row.clip(&mut lo, &mut hi);
+            }
+            let (x0, x1) = (lo.max(self.cx0), hi.min(self.cx1));
+            let (py, dy) = (self.py, self.dy);
+            for row in &mut self.rows {
+                row.next();
+            }
+            self.py += 1;
+            self.dy += T::ONE;
+            if x0 < x1 {
+                let at = |e: &EdgeAt<T>| (e.a * lo + e.b + e.step * dy).to_i64();
+                return Some(Row {
+                    py,
+                    xr: self.ax + lo.to_i64(),
+                    x0: self.ax + x0.to_i64(),
+                    x1: self.ax + x1.to_i64(),
+                    e1: at(&self.e[1]),
+                    e2: at(&self.e[2]),
+                });
+            }
         }
-        for row in &mut rows {
-            row.next();
-        }
-        dy += T::ONE;
+        None
     }
 }
 
@@ -212,14 +256,14 @@ mod tests {
             let mut sa = [0i64; 6 * 64];
             let mut sb = [0i64; 6 * 64];
             let (mut na, mut nb) = (0, 0);
-            for_each_span(&a.e, &a.bounds, &clip, |py, xr, x0, x1, e1, e2| {
-                sa[na..na + 6].copy_from_slice(&[py, xr, x0, x1, e1, e2]);
+            for r in Spans::new(&a.e, &a.bounds, &clip) {
+                sa[na..na + 6].copy_from_slice(&[r.py, r.xr, r.x0, r.x1, r.e1, r.e2]);
                 na += 6;
-            });
-            for_each_span(&b.e, &b.bounds, &clip, |py, xr, x0, x1, e1, e2| {
-                sb[nb..nb + 6].copy_from_slice(&[py, xr, x0, x1, e1, e2]);
+            }
+            for r in Spans::new(&b.e, &b.bounds, &clip) {
+                sb[nb..nb + 6].copy_from_slice(&[r.py, r.xr, r.x0, r.x1, r.e1, r.e2]);
                 nb += 6;
-            });
+            }
             assert_eq!(sa[..na], sb[..nb]);
             checked += na;
         }

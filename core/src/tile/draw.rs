@@ -9,7 +9,7 @@
 //! plane mask, store. Coverage antialiasing diverts solids into the
 //! coverage plane ([`crate::raster::coverage`]) until the tile is resolved.
 
-use super::Tile;
+use super::{Phase, Tile};
 use crate::command::{Command, SpanCmd, State};
 use crate::config::TileConfig;
 use crate::error::Error;
@@ -20,7 +20,7 @@ use crate::geom::Rect;
 use crate::numeric::{Precision, COLOR_FRAC, SUBPIXEL as SUBPIXEL_I64, Z_FRAC};
 use crate::raster::coverage::{AaMode, AaPlane};
 use crate::raster::span::SpanStart;
-use crate::raster::traverse::for_each_span;
+use crate::raster::traverse::{Row, Spans};
 use crate::setup::{fits_i32, EdgeInt, TriangleSetup};
 
 impl<const N: usize, C, F, Z, W, D, A, P> Tile<N, C>
@@ -48,6 +48,21 @@ where
     /// mask are drawn over the resolved pixels in the second, so the mask
     /// keeps the bits it protects (coverage samples hold whole colours,
     /// not planes).
+    /// A triangle set up, and traversed from [`Phase::Traverse`] on, but
+    /// not drawn: what the frame's phase counters measure before
+    /// [`Phase::All`] ([`Frame::render_until`](crate::frame::Frame::render_until)).
+    pub(crate) fn draw_upto<const UPTO: u8>(&mut self, cmd: &Command) {
+        if let Command::Triangle { v, .. } = cmd {
+            if UPTO >= Phase::Setup as u8 {
+                if fits_i32(v) {
+                    self.triangle_upto::<UPTO, i32>(v);
+                } else {
+                    self.triangle_upto::<UPTO, i64>(v);
+                }
+            }
+        }
+    }
+
     pub(crate) fn draw_valid(&mut self, cmd: &Command) {
         if A::SAMPLES > 0 {
             let masked = match cmd {
@@ -112,10 +127,34 @@ where
         }
     }
 
+    /// Setup, and traversal from [`Phase::Traverse`] on, of a triangle,
+    /// without drawing it.
+    #[inline(always)]
+    fn triangle_upto<const UPTO: u8, T: EdgeInt>(&mut self, v: &[crate::command::Vertex; 3]) {
+        let Some(t) = TriangleSetup::<_, T>::new::<F>(v) else {
+            return;
+        };
+        if UPTO >= Phase::Traverse as u8 {
+            for row in Spans::new(&t.e, &t.bounds, &self.area) {
+                core::hint::black_box(row);
+            }
+        } else {
+            core::hint::black_box(&t);
+        }
+    }
+
     #[inline(always)]
     fn triangle<T: EdgeInt>(&mut self, t: &TriangleSetup<F::Lanes, T>, st: &State) {
         let area = self.area;
-        for_each_span(&t.e, &t.bounds, &area, |py, xr, x0, x1, e1, e2| {
+        for Row {
+            py,
+            xr,
+            x0,
+            x1,
+            e1,
+            e2,
+        } in Spans::new(&t.e, &t.bounds, &area)
+        {
             // Restart from the plane equation at xr, then advance to x0 by
             // multiplication: exactly the values x0 - xr DDA steps give, so
             // the output does not depend on the tiling.
@@ -129,7 +168,7 @@ where
             .quantized::<P>()
             .advanced(x0 - xr);
             self.span(x0, py, x1 - x0, start, st);
-        });
+        }
     }
 
     /// A triangle through the coverage plane: one fragment per pixel of

@@ -26,6 +26,34 @@ use embedded_graphics_core::{
     Pixel,
 };
 
+/// The phases of a frame, in pipeline order: a frame rendered *until* a
+/// phase ([`Frame::render_until`](crate::frame::Frame::render_until)) does
+/// the work of that phase and every one before it and nothing after, so
+/// firmware measures each phase's cost as the difference of two runs with
+/// its own clock — counters with no probe inside the hot loops.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u8)]
+pub enum Phase {
+    /// The binning passes over the list (each decodes every command).
+    Bin = 0,
+    /// Clearing each tile's planes.
+    Clear = 1,
+    /// Reading each tile's commands in place (decode of the binned keys).
+    Decode = 2,
+    /// Triangle setup: edge functions and attribute planes.
+    Setup = 3,
+    /// Traversal: each triangle's covered pixels, row by row.
+    Traverse = 4,
+    /// Everything: span loops, fragment tests and stores, the other
+    /// commands, coverage resolve — and the flush hook.
+    All = 5,
+}
+
+impl Phase {
+    pub(crate) const ALL: u8 = Phase::All as u8;
+}
+
 /// Values every tile starts with.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

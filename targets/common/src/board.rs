@@ -101,8 +101,16 @@ pub fn run<const ND: usize, const NS: usize, const BC: usize, const BT: usize>(
         crate::report::report_scene::<crate::report::Demo, ND, BC, BT>(
             DEMO, demo_tile, &mut out, &mut clock,
         )?;
+        #[cfg(feature = "demo")]
+        crate::report::report_phases::<crate::report::Demo, ND, BC, BT>(
+            DEMO, demo_tile, &mut out, &mut clock,
+        )?;
         #[cfg(feature = "teapot")]
         crate::report::report_scene::<crate::report::Teapot, ND, BC, BT>(
+            TEAPOT, demo_tile, &mut out, &mut clock,
+        )?;
+        #[cfg(feature = "teapot")]
+        crate::report::report_phases::<crate::report::Teapot, ND, BC, BT>(
             TEAPOT, demo_tile, &mut out, &mut clock,
         )?;
         #[cfg(feature = "ssd1306")]

@@ -105,3 +105,40 @@ where
     run.stats = stats;
     Ok(run)
 }
+
+/// Ticks of rendering an encoded scene *until* each phase ([`Phase`]), in
+/// pipeline order (bin, clear, decode, setup, traverse, all): cumulative, so
+/// a phase's own cost is the difference with the one before. Nothing is
+/// flushed; `run_scene` measures the flush.
+pub fn phase_ticks<const N: usize, C: TileConfig, const BC: usize, const BT: usize>(
+    scene: &[u8],
+    tile_buf: &mut Tile<N, C>,
+    bins: &mut Bins<BC, BT>,
+    tile: (u16, u16),
+    clock: &mut impl Clock,
+) -> Result<[u64; 6], Error> {
+    let (header, cmds) = SceneHeader::parse(scene)?;
+    header.check::<C>()?;
+    let frame = header.frame(tile)?;
+    let mut out = [0; 6];
+    let phases = [
+        Phase::Bin,
+        Phase::Clear,
+        Phase::Decode,
+        Phase::Setup,
+        Phase::Traverse,
+        Phase::All,
+    ];
+    for (o, phase) in out.iter_mut().zip(phases) {
+        clock.lap();
+        frame
+            .render_until(phase, tile_buf, bins, &cmds, |_| Ok::<(), ()>(()))
+            .map_err(|e| match e {
+                FlushError::Raster(e) => e,
+                // The hook above never fails.
+                _ => Error::BadSize,
+            })?;
+        *o = clock.lap() as u64;
+    }
+    Ok(out)
+}

@@ -77,6 +77,7 @@ where
 /// Prints `scene NAME tile WxH crc 0x... pixels P raster_ticks R flush_ticks F
 /// replayed C bin_passes B bin_peak E unbinned U`, rendered with bins of
 /// `BC` entries for `BT` tiles.
+#[inline(never)] // its tile and bins leave the stack before the next scene's
 pub fn report_scene<K: SceneKind, const N: usize, const BC: usize, const BT: usize>(
     scene: &[u8],
     tile: (u16, u16),
@@ -104,6 +105,27 @@ where
             r.stats.unbinned_tiles
         ),
         Err(e) => writeln!(out, "scene {} error {e}", K::NAME),
+    }
+}
+
+/// Prints `phases NAME bin B clear C decode D setup S traverse T all A`:
+/// ticks to render the scene until each phase (cumulative).
+#[inline(never)]
+pub fn report_phases<K: SceneKind, const N: usize, const BC: usize, const BT: usize>(
+    scene: &[u8],
+    tile: (u16, u16),
+    out: &mut impl Write,
+    clock: &mut impl Clock,
+) -> core::fmt::Result {
+    let mut buf: Tile<N, K::C> = Tile::new();
+    let mut bins: Bins<BC, BT> = Bins::new();
+    match crate::phase_ticks(scene, &mut buf, &mut bins, tile, clock) {
+        Ok([b, c, d, s, t, a]) => writeln!(
+            out,
+            "phases {} bin {b} clear {c} decode {d} setup {s} traverse {t} all {a}",
+            K::NAME
+        ),
+        Err(e) => writeln!(out, "phases {} error {e}", K::NAME),
     }
 }
 
