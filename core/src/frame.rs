@@ -68,8 +68,8 @@ impl CommandSource for [Command] {
             Ok(())
         })
     }
-    fn replay(&self, keys: impl Iterator<Item = u32>, mut f: impl FnMut(&Command)) {
-        keys.filter_map(|k| self.get(k as usize)).for_each(|c| f(c))
+    fn replay(&self, keys: impl Iterator<Item = u32>, f: impl FnMut(&Command)) {
+        keys.filter_map(|k| self.get(k as usize)).for_each(f)
     }
 }
 
@@ -79,8 +79,8 @@ impl<const CAP: usize> CommandSource for DisplayList<CAP> {
         self.iter().zip(0..).for_each(|(c, k)| f(k, c));
         Ok(())
     }
-    fn replay(&self, keys: impl Iterator<Item = u32>, mut f: impl FnMut(&Command)) {
-        keys.filter_map(|k| self.get(k as usize)).for_each(|c| f(c))
+    fn replay(&self, keys: impl Iterator<Item = u32>, f: impl FnMut(&Command)) {
+        keys.filter_map(|k| self.get(k as usize)).for_each(f)
     }
 }
 
@@ -400,6 +400,90 @@ impl Frame {
         T::Color: From<<C::Format as PixelFormat>::Color>,
     {
         self.render_with(tile, cmds, |t| t.flush(target))
+    }
+}
+
+/// Partial updates: remembers a hash of every tile last sent to the display,
+/// so a frame flushes only the tiles whose pixels changed — what LVGL's
+/// invalidated areas achieve, found from the output itself, so no command
+/// has to be tracked. An animation that moves a needle resends a few tiles
+/// instead of the screen (`reports/targets.md` measures the bytes).
+///
+/// The hash ([`Tile::content_hash`]) is 32 bits: a changed tile whose hash
+/// collides (odds 2^-32 per changed tile) keeps its old pixels until it
+/// changes again; [`Damage::invalidate`] forces a full refresh (after a
+/// display reset, or every few seconds for certainty). `TILES` hashes cost
+/// `5 TILES` bytes; tiles beyond `TILES` are always sent.
+///
+/// ```
+/// use tilerast::prelude::*;
+/// type T = Tile<{ groups(16, 16) }, Rgb565Format>;
+/// let frame = T::frame::<16, 16>(32, 16)?; // two tiles
+/// let (mut tile, mut damage) = (T::new(), Damage::<2>::new());
+/// let mut sent = |x: i32, damage: &mut Damage<2>| {
+///     let list = [Command::fill(Rect::new(x, 0, 4, 4), Rgb::new(255, 0, 0))];
+///     let mut n = 0;
+///     frame.render_with(&mut tile, &list[..], |t| {
+///         n += damage.changed(&frame, t) as u32;
+///         Ok::<(), ()>(())
+///     }).map(|_| n).map_err(|_| Error::BadSize)
+/// };
+/// assert_eq!(sent(0, &mut damage)?, 2); // first frame: everything
+/// assert_eq!(sent(0, &mut damage)?, 0); // nothing moved
+/// assert_eq!(sent(20, &mut damage)?, 2); // left tile cleared, right one drawn
+/// assert_eq!(sent(24, &mut damage)?, 1); // moved within the right tile
+/// # Ok::<(), Error>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct Damage<const TILES: usize> {
+    hash: [u32; TILES],
+    known: [bool; TILES],
+}
+
+impl<const TILES: usize> Default for Damage<TILES> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const TILES: usize> Damage<TILES> {
+    /// Nothing sent yet: every tile counts as changed.
+    pub const fn new() -> Self {
+        Damage {
+            hash: [0; TILES],
+            known: [false; TILES],
+        }
+    }
+
+    /// Forgets what was sent: the next frame sends every tile.
+    pub fn invalidate(&mut self) {
+        self.known = [false; TILES];
+    }
+
+    /// Whether `tile` (a finished tile of `frame`) differs from what was
+    /// last sent for its place — then it is remembered as sent, so call it
+    /// once per tile, and flush the tile when it returns `true`.
+    pub fn changed<const N: usize, C: TileConfig>(
+        &mut self,
+        frame: &Frame,
+        tile: &Tile<N, C>,
+    ) -> bool {
+        let a = tile.area();
+        let g = frame.grid();
+        let t = (a.y.max(0) as u32 / g.th) * g.cols + a.x.max(0) as u32 / g.tw;
+        let h = tile.content_hash();
+        match (
+            self.hash.get_mut(t as usize),
+            self.known.get_mut(t as usize),
+        ) {
+            (Some(old), Some(known)) => {
+                let same = *known && *old == h;
+                *old = h;
+                *known = true;
+                !same
+            }
+            _ => true,
+        }
     }
 }
 

@@ -116,7 +116,7 @@ pub mod prelude {
     pub use crate::fragment::{
         Depth16, Depth24, Depth32, DepthMode, NoDepth, NoWid, Wid8, WidMode,
     };
-    pub use crate::frame::{Clear, CommandSource, Frame, FrameStats, Phase};
+    pub use crate::frame::{Clear, CommandSource, Damage, Frame, FrameStats, Phase};
     pub use crate::geom::Rect;
     pub use crate::list::DisplayList;
     pub use crate::numeric::{

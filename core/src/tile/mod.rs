@@ -298,6 +298,95 @@ where
         (0..self.area.area() as usize).map(|i| F::to_color(self.color.get(i)))
     }
 
+    /// Bytes [`Tile::panel_bytes`] writes for a `w x h` tile: what a display
+    /// controller's RAM-write command takes for that window.
+    pub const fn panel_len(w: u32, h: u32) -> usize {
+        let n = w as usize * h as usize;
+        match F::MASK_ALL.count_ones() {
+            1 => n / 8,
+            12 => (3 * n).div_ceil(2),
+            b => n * (b as usize).div_ceil(8),
+        }
+    }
+
+    /// The tile's pixels as the panel's RAM-write command takes them, into
+    /// `out`; returns the bytes written. Row-major, and: RGB565 big-endian
+    /// (ST7789, ILI9341 in 16-bit mode); RGB444 two pixels in three bytes
+    /// (their 12-bit mode); RGB888 and Gray8 a byte per channel; 1-bit in
+    /// SSD1306 page order — a byte per column of 8 rows, bit 0 on top (the
+    /// tile's height must be a multiple of 8, or [`Error::BadSize`]). What a
+    /// DMA transfer sends while the next tile renders.
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// let mut tile: Tile<1, Rgb565Format> = Tile::new();
+    /// tile.begin(Rect::new(0, 0, 2, 1), &Clear::default())?;
+    /// tile.draw(&Command::fill(Rect::new(1, 0, 1, 1), Rgb::new(255, 0, 0)))?;
+    /// let mut buf = [0u8; 4];
+    /// assert_eq!(tile.panel_bytes(&mut buf)?, 4);
+    /// assert_eq!(buf, [0x00, 0x00, 0xF8, 0x00]); // big-endian RGB565
+    ///
+    /// let mut oled: Tile<2, BinaryFormat> = Tile::new();
+    /// oled.begin(Rect::new(0, 0, 2, 8), &Clear::default())?;
+    /// oled.draw(&Command::fill(Rect::new(1, 2, 1, 3), Rgb::new(255, 255, 255)))?;
+    /// let mut page = [0u8; 2];
+    /// assert_eq!(oled.panel_bytes(&mut page)?, 2);
+    /// assert_eq!(page, [0, 0b0001_1100]); // column 1, rows 2..5
+    /// # Ok::<(), Error>(())
+    /// ```
+    pub fn panel_bytes(&self, out: &mut [u8]) -> Result<usize, Error> {
+        let a = self.area;
+        let n = a.area() as usize;
+        let len = Self::panel_len(a.w, a.h);
+        let out = out.get_mut(..len).ok_or(Error::BufferTooSmall)?;
+        let px = |i: usize| self.color.get(i);
+        match F::MASK_ALL.count_ones() {
+            1 => {
+                if a.h % 8 != 0 {
+                    return Err(Error::BadSize);
+                }
+                let w = a.w as usize;
+                for (k, byte) in out.iter_mut().enumerate() {
+                    let (page, x) = (k / w, k % w);
+                    *byte = (0..8).fold(0, |b, bit| {
+                        b | ((px((page * 8 + bit) * w + x) as u8 & 1) << bit)
+                    });
+                }
+            }
+            12 => {
+                for (k, o) in out.chunks_mut(3).enumerate() {
+                    let p0 = px(2 * k);
+                    let p1 = if 2 * k + 1 < n { px(2 * k + 1) } else { 0 };
+                    let b = [(p0 >> 4) as u8, ((p0 << 4) | (p1 >> 8)) as u8, p1 as u8];
+                    let m = o.len();
+                    o.copy_from_slice(&b[..m]);
+                }
+            }
+            bits => {
+                let bytes = (bits as usize).div_ceil(8);
+                for (i, o) in out.chunks_exact_mut(bytes).enumerate() {
+                    let p = px(i);
+                    for (j, b) in o.iter_mut().enumerate() {
+                        *b = (p >> (8 * (bytes - 1 - j))) as u8;
+                    }
+                }
+            }
+        }
+        Ok(len)
+    }
+
+    /// A 32-bit hash of the tile's area and colour plane (multiply-xor,
+    /// about 4 instructions a pixel): what [`Damage`](crate::frame::Damage)
+    /// compares between frames.
+    pub fn content_hash(&self) -> u32 {
+        let a = self.area;
+        let mix = |h: u32, v: u32| (h ^ v).wrapping_mul(0x9E37_79B1).rotate_left(13);
+        let h = [a.x as u32, a.y as u32, a.w, a.h]
+            .into_iter()
+            .fold(0x811C_9DC5, mix);
+        (0..a.area() as usize).fold(h, |h, i| mix(h, self.color.get(i)))
+    }
+
     /// Flushes the tile to a display: one `fill_contiguous` over the tile
     /// rectangle, converting each pixel to the display's colour type.
     pub fn flush<T>(&self, target: &mut T) -> Result<(), T::Error>

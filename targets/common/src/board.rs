@@ -119,6 +119,8 @@ pub fn run<const ND: usize, const NS: usize, const BC: usize, const BT: usize>(
         )?;
         #[cfg(feature = "bench")]
         crate::report::report_benches(&mut out, &mut clock)?;
+        #[cfg(feature = "anim")]
+        crate::report::report_anim(&mut out, &mut clock)?;
         writeln!(out, "stack_used {}", stack_used())?;
         writeln!(out, "done")
     };

@@ -12,6 +12,8 @@
 //! - [`workloads`]: the fixed workloads whose cost per pixel the boards
 //!   report (flat fill, Gouraud with and without Z, window ID and dither,
 //!   and `embedded-graphics`' own triangle fill for comparison).
+//! - [`anim`]: an animated gauge flushed by partial updates (only the
+//!   tiles that changed), with the bytes it saves.
 //! - [`rng`]: the deterministic PRNG those workloads (and the host tests)
 //!   use.
 //! - [`report`]: the lines a firmware prints (scene CRCs, workload ticks),
@@ -22,6 +24,7 @@
 #![deny(missing_docs)]
 #![cfg_attr(not(feature = "board"), forbid(unsafe_code))]
 
+pub mod anim;
 #[cfg(feature = "board")]
 pub mod board;
 pub mod report;

@@ -129,6 +129,26 @@ pub fn report_phases<K: SceneKind, const N: usize, const BC: usize, const BT: us
     }
 }
 
+/// Prints `anim frames F tiles T sent_tiles S bytes_full B bytes_sent P ticks K`:
+/// the animated gauge with partial updates ([`crate::anim`]).
+#[inline(never)]
+pub fn report_anim(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt::Result {
+    let mut tile = crate::anim::AnimTile::new();
+    match crate::anim::run(&mut tile, clock, |_| {}) {
+        Ok(r) => writeln!(
+            out,
+            "anim frames {} tiles {} sent_tiles {} bytes_full {} bytes_sent {} ticks {}",
+            crate::anim::FRAMES,
+            r.tiles,
+            r.sent_tiles,
+            r.bytes_full,
+            r.bytes_sent,
+            r.ticks
+        ),
+        Err(e) => writeln!(out, "anim error {e}"),
+    }
+}
+
 /// How a workload is drawn.
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Via {
