@@ -216,7 +216,7 @@ impl Frame {
     where
         S: CommandSource + ?Sized,
     {
-        self.render_upto::<{ Phase::ALL }, N, C, S, E, CAP, TB>(tile, bins, cmds, done)
+        self.render_upto::<{ Phase::ALL }, N, C, S, E, CAP, TB>(Phase::All, tile, bins, cmds, done)
     }
 
     /// [`Frame::render_binned`] stopped after `phase` ([`Phase`]): for
@@ -249,11 +249,17 @@ impl Frame {
         S: CommandSource + ?Sized,
     {
         match phase {
-            Phase::Bin => self.render_upto::<0, N, C, S, E, CAP, TB>(tile, bins, cmds, done),
-            Phase::Clear => self.render_upto::<1, N, C, S, E, CAP, TB>(tile, bins, cmds, done),
-            Phase::Decode => self.render_upto::<2, N, C, S, E, CAP, TB>(tile, bins, cmds, done),
-            Phase::Setup => self.render_upto::<3, N, C, S, E, CAP, TB>(tile, bins, cmds, done),
-            Phase::Traverse => self.render_upto::<4, N, C, S, E, CAP, TB>(tile, bins, cmds, done),
+            // One instantiation for the phases that draw nothing (flash is
+            // scarce on the micro:bit), one for each that draws part.
+            Phase::Bin | Phase::Clear | Phase::Decode => {
+                self.render_upto::<2, N, C, S, E, CAP, TB>(phase, tile, bins, cmds, done)
+            }
+            Phase::Setup => {
+                self.render_upto::<3, N, C, S, E, CAP, TB>(phase, tile, bins, cmds, done)
+            }
+            Phase::Traverse => {
+                self.render_upto::<4, N, C, S, E, CAP, TB>(phase, tile, bins, cmds, done)
+            }
             Phase::All => self.render_binned(tile, bins, cmds, done),
         }
     }
@@ -268,6 +274,7 @@ impl Frame {
         const TB: usize,
     >(
         &self,
+        phase: Phase,
         tile: &mut Tile<N, C>,
         bins: &mut Bins<CAP, TB>,
         cmds: &S,
@@ -334,12 +341,12 @@ impl Frame {
             }
             let last = if binned { t1 } else { t0 + 1 };
             for t in t0..last {
-                if UPTO == Phase::Bin as u8 {
+                if phase == Phase::Bin {
                     break;
                 }
                 let area = self.tile_rect(&g, t);
                 tile.begin(area, &self.clear)?;
-                if UPTO == Phase::Clear as u8 {
+                if phase == Phase::Clear {
                     continue;
                 }
                 let mut replay = |tile: &mut Tile<N, C>| {

@@ -8,7 +8,9 @@
 //!   `tiny-skia`) against the 16x16 supersampled ideal (seeds 003, 000);
 //! - [`ruf`]: the RUF-buffer paper's Tables 1-4 on its models (seed 000);
 //! - [`tradeoff`]: the speed-against-accuracy sweep of every knob, with
-//!   Pareto fronts.
+//!   Pareto fronts;
+//! - [`frames`]: whole frames (tiled, one tile, f64 reference) and filled
+//!   triangles against `embedded-graphics` and `tiny-skia`, timed in one run.
 //!
 //! `tilerast-lab aa-report | ruf-report | tradeoff` writes the reports
 //! into `reports/`; `cargo xtask bench` runs them all after the criterion
@@ -16,5 +18,6 @@
 
 pub mod aa;
 pub mod chart;
+pub mod frames;
 pub mod ruf;
 pub mod tradeoff;

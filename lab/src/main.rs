@@ -49,6 +49,19 @@ enum Cmd {
         #[arg(long, default_value = "reports/ruf_models.png")]
         renders: PathBuf,
     },
+    /// Time whole frames (core tiled and binned, one big tile, the f64
+    /// reference) and filled triangles against embedded-graphics and
+    /// tiny-skia, in one run. Writes a Markdown report.
+    Frames {
+        /// Scene files to time.
+        scenes: Vec<PathBuf>,
+        /// Timed renders per measurement; the median is reported.
+        #[arg(long, default_value_t = 15)]
+        runs: usize,
+        /// Markdown output.
+        #[arg(short, long, default_value = "reports/frames.md")]
+        output: PathBuf,
+    },
     /// Sweep every knob (colour and Z fraction bits, depth bits, sub-pixel
     /// bits, dither per format, antialiasing of solids, line mode) on a
     /// fixed set of scenes and measure error and cost: Markdown, CSV and a
@@ -81,6 +94,16 @@ enum Cmd {
 
 fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
     match cli.cmd {
+        Cmd::Frames {
+            scenes,
+            runs,
+            output,
+        } => {
+            let md = tilerast_lab::frames::report(&scenes, runs.max(1))?;
+            std::fs::write(&output, &md).map_err(|e| format!("{}: {e}", output.display()))?;
+            print!("{md}");
+            println!("wrote {}", output.display());
+        }
         Cmd::AaReport {
             scenes,
             output,

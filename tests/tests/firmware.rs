@@ -32,6 +32,12 @@ struct Report {
     instr_per_tick: f64,
     scenes: BTreeMap<String, SceneLine>,
     benches: BTreeMap<String, u64>,
+    /// Per scene: ticks until each phase (bin, clear, decode, setup, traverse, all).
+    phases: BTreeMap<String, [u64; 6]>,
+    /// The animated gauge: (frames, tiles, sent tiles, bytes full, bytes sent, ticks).
+    anim: Option<[u64; 6]>,
+    /// Per scene: (bin passes, bin peak, unbinned tiles, replayed).
+    bins: BTreeMap<String, [u64; 4]>,
     stack_used: u64,
 }
 
@@ -69,12 +75,41 @@ fn parse(out: &str) -> Report {
                     raster_ticks: num("raster_ticks"),
                     flush_ticks: num("flush_ticks"),
                 };
+                r.bins.insert(
+                    w[1].to_string(),
+                    [
+                        num("bin_passes"),
+                        num("bin_peak"),
+                        num("unbinned"),
+                        num("replayed"),
+                    ],
+                );
                 r.scenes.insert(w[1].to_string(), line);
             }
             Some("bench") => {
                 assert!(!w.contains(&"error"), "{line}");
                 r.benches
                     .insert(w[1].to_string(), field(&w, "ticks").parse().unwrap());
+            }
+            Some("phases") => {
+                assert!(!w.contains(&"error"), "{line}");
+                let k = ["bin", "clear", "decode", "setup", "traverse", "all"]
+                    .map(|k| field(&w, k).parse::<u64>().unwrap());
+                r.phases.insert(w[1].to_string(), k);
+            }
+            Some("anim") => {
+                assert!(!w.contains(&"error"), "{line}");
+                r.anim = Some(
+                    [
+                        "frames",
+                        "tiles",
+                        "sent_tiles",
+                        "bytes_full",
+                        "bytes_sent",
+                        "ticks",
+                    ]
+                    .map(|k| field(&w, k).parse::<u64>().unwrap()),
+                );
             }
             Some("stack_used") => r.stack_used = w[1].parse().unwrap(),
             _ => {}
@@ -364,6 +399,56 @@ fn report(reports: &[BoardResult]) -> String {
                 l.flush_ticks as f64 * k / l.pixels as f64,
                 (l.raster_ticks + l.flush_ticks) as f64 * k / 1e6,
                 l.crc
+            );
+        }
+    }
+    md += "\n## Where a frame goes (phase counters)\n\nEach scene is rendered again *until* each phase \
+           (`Frame::render_until`: the work of that phase and every one before it, nothing after), \
+           timed by SysTick; a phase's cost is the difference with the one before. *Bin*: the \
+           binning passes (each decodes every command); *decode*: reading each tile's binned \
+           commands in place; *setup*: triangle setup; *traverse*: the rows each triangle covers; \
+           *span and rest*: per-row restart, span loops, fragment tests and stores, the other \
+           commands. *Flush*: the label and the flush, from the frame above. Millions of instructions.\n\n\
+           | board | scene | bin | clear | decode | setup | traverse | span and rest | flush | total | bin passes | bin entries (peak) | tiles unbinned | (tile, command) pairs |\n\
+           | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
+    for b in &boards {
+        for (name, p) in &b.phases {
+            let k = b.instr_per_tick / 1e6;
+            let l = &b.scenes[name];
+            let d = |i: usize| p[i].saturating_sub(if i == 0 { 0 } else { p[i - 1] }) as f64 * k;
+            let bins = b.bins[name];
+            md += &format!(
+                "| {} | {name} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {} | {} | {} | {} |\n",
+                b.board,
+                d(0),
+                d(1),
+                d(2),
+                d(3),
+                d(4),
+                d(5),
+                l.flush_ticks as f64 * k,
+                (l.raster_ticks + l.flush_ticks) as f64 * k,
+                bins[0],
+                bins[1],
+                bins[2],
+                bins[3]
+            );
+        }
+    }
+    for b in &boards {
+        if let Some([frames, tiles, sent, full, bytes, ticks]) = b.anim {
+            md += &format!(
+                "\n## Partial updates ({})\n\nAn animated gauge (`targets/common/src/anim.rs`): 12 Gouraud \
+                 wedges and a needle that turns every frame, 240x240 RGB565 + Z in 64x32 tiles, {frames} \
+                 frames. Each finished tile is hashed (`Damage`) and sent only when it changed.\n\n\
+                 | | tiles sent | bytes sent to the panel | per frame |\n| --- | ---: | ---: | ---: |\n\
+                 | full refresh | {tiles} | {full} | {} |\n| partial updates | {sent} | {bytes} | {} |\n\n\
+                 Bytes sent: **{:.1}%** of a full refresh. Rendering and hashing: {:.2} M instructions a frame.\n",
+                b.board,
+                full / frames,
+                bytes / frames,
+                100.0 * bytes as f64 / full as f64,
+                ticks as f64 * b.instr_per_tick / frames as f64 / 1e6
             );
         }
     }

@@ -42,7 +42,10 @@ fn partial_updates_leave_the_panel_equal_to_full_refreshes() {
     assert!(panel == full, "the partially updated panel differs");
     assert_eq!(run.tiles, FRAMES * anim::TILES as u32);
     // The needle moves every frame, so some tiles are resent, but far from all.
-    assert!(run.sent_tiles > FRAMES && run.bytes_sent * 3 < run.bytes_full, "{run:?}");
+    assert!(
+        run.sent_tiles > FRAMES && run.bytes_sent * 3 < run.bytes_full,
+        "{run:?}"
+    );
 }
 
 #[test]

@@ -379,7 +379,23 @@ fn report() -> Result<(), String> {
         "{}",
         std::fs::read_to_string(&path).map_err(|e| e.to_string())?
     );
-    Ok(())
+    // Host frames (tiled, one tile, f64 reference) and fills against the
+    // peers, timed in one run: `reports/frames.md`.
+    run(
+        "cargo",
+        &[
+            "run",
+            "--release",
+            "-p",
+            "tilerast-lab",
+            "--",
+            "frames",
+            "scenes/teapot.toml",
+            "scenes/demo.toml",
+            "-o",
+            "reports/frames.md",
+        ],
+    )
 }
 
 fn demo() -> Result<(), String> {

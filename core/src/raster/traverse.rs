@@ -219,8 +219,8 @@ mod tests {
 
     #[test]
     fn i32_and_i64_edges_give_the_same_spans() {
-        use crate::command::Vertex;
         use crate::format::{Rgb, Rgb565Format};
+        use crate::geom::Vertex;
         use crate::numeric::Coord;
         use crate::setup::{fits_i32, TriangleSetup};
         let mut seed = 0x1234_5678_9abc_def0u64;

@@ -33,7 +33,12 @@ pub const fn sin_cos(k: u32) -> (i32, i32) {
 }
 
 fn vtx(x: i32, y: i32, z: u16, c: [u8; 3]) -> Vertex {
-    Vertex::new(Coord::from_bits(x), Coord::from_bits(y), z, Rgb::new(c[0], c[1], c[2]))
+    Vertex::new(
+        Coord::from_bits(x),
+        Coord::from_bits(y),
+        z,
+        Rgb::new(c[0], c[1], c[2]),
+    )
 }
 
 /// Frame `k`'s commands: the dial (12 Gouraud wedges, depth 40000) and
@@ -55,9 +60,24 @@ pub fn frame_commands(k: u32) -> [Command; 13] {
     let (s, co) = sin_cos(k);
     let (len, half) = (90 * 16, 5 * 16);
     out[12] = Command::triangle([
-        vtx(c + len * co / 4096, c + len * s / 4096, 1000, [255, 255, 255]),
-        vtx(c - half * s / 4096, c + half * co / 4096, 1000, [255, 40, 0]),
-        vtx(c + half * s / 4096, c - half * co / 4096, 1000, [255, 40, 0]),
+        vtx(
+            c + len * co / 4096,
+            c + len * s / 4096,
+            1000,
+            [255, 255, 255],
+        ),
+        vtx(
+            c - half * s / 4096,
+            c + half * co / 4096,
+            1000,
+            [255, 40, 0],
+        ),
+        vtx(
+            c + half * s / 4096,
+            c - half * co / 4096,
+            1000,
+            [255, 40, 0],
+        ),
     ]);
     out
 }

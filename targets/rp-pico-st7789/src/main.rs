@@ -1,8 +1,11 @@
 //! tilerast on real hardware: a Raspberry Pi Pico (RP2040, Cortex-M0+, no
-//! FPU) drives a 240x240 ST7789 over SPI through `mipidsi`. Each frame is
-//! rendered in 60x40 tiles — 2400 pixels of RGB565 + 16-bit Z, 9.6 KB — and
-//! every tile goes straight to the panel with one `fill_contiguous`: no
-//! 115 KB frame buffer anywhere.
+//! FPU) drives a 240x240 ST7789 over SPI. `mipidsi` initialises the panel;
+//! then each frame is rendered in 60x40 tiles — 2400 pixels of RGB565 +
+//! 16-bit Z, 9.6 KB — and sent by **DMA while the next tile renders**: the
+//! panel's memory is the front buffer, and two 4.8 KB byte buffers
+//! ping-pong — tile k+1 is rendered and packed (`Tile::panel_bytes`:
+//! big-endian RGB565) while tile k streams out. No 115 KB frame buffer
+//! anywhere.
 //!
 //! Wiring (SPI0): GP18 SCK, GP19 MOSI, GP17 CS, GP16 DC, GP20 RST.
 //! Flash and watch the log with a probe (`cargo run --release`: probe-rs
@@ -11,7 +14,9 @@
 #![no_std]
 #![no_main]
 
-use embedded_hal_bus::spi::ExclusiveDevice;
+use embedded_hal::digital::OutputPin;
+use embedded_hal::spi::SpiBus;
+use hal::dma::{single_buffer, Channel, DMAExt, CH0};
 use micromath::F32Ext;
 use mipidsi::{interface::SpiInterface, models::ST7789, options::ColorInversion, Builder};
 use rp_pico::entry;
@@ -21,6 +26,71 @@ use {defmt_rtt as _, panic_probe as _};
 
 /// 60x40-pixel tiles, ST7789 preset (RGB565 + 16-bit Z + 4x4 dither).
 type PanelTile = Tile<{ groups(60, 40) }, St7789Config>;
+
+/// Bytes of one tile as the panel takes it.
+const TILE_BYTES: usize = 60 * 40 * 2;
+/// One ping-pong buffer.
+type Buf = &'static mut [u8; TILE_BYTES];
+
+/// Sends an ST7789 command byte (DC low) and its parameters (DC high),
+/// blocking: a few bytes before each tile's DMA transfer.
+fn command<B: SpiBus, D: OutputPin>(bus: &mut B, dc: &mut D, cmd: u8, data: &[u8]) {
+    let _ = dc.set_low();
+    let _ = bus.write(&[cmd]);
+    let _ = bus.flush();
+    let _ = dc.set_high();
+    let _ = bus.write(data);
+    let _ = bus.flush();
+}
+
+/// Opens the panel window of `a` for a RAM write (CASET, RASET, RAMWR).
+fn window<B: SpiBus, D: OutputPin>(bus: &mut B, dc: &mut D, a: Rect) {
+    let be = |lo: i32, len: u32| {
+        let (s, e) = (lo as u16, (lo + len as i32 - 1) as u16);
+        [(s >> 8) as u8, s as u8, (e >> 8) as u8, e as u8]
+    };
+    command(bus, dc, 0x2A, &be(a.x, a.w));
+    command(bus, dc, 0x2B, &be(a.y, a.h));
+    command(bus, dc, 0x2C, &[]);
+}
+
+/// The SPI bus and chip select as the `SpiDevice` `mipidsi` initialises the
+/// panel through, given back afterwards for DMA (`embedded-hal-bus`'s
+/// `ExclusiveDevice` keeps its bus).
+struct Device<B, C> {
+    bus: B,
+    cs: C,
+}
+
+impl<B: embedded_hal::spi::ErrorType, C> embedded_hal::spi::ErrorType for Device<B, C> {
+    type Error = B::Error;
+}
+
+impl<B: SpiBus, C: OutputPin> embedded_hal::spi::SpiDevice for Device<B, C> {
+    fn transaction(
+        &mut self,
+        ops: &mut [embedded_hal::spi::Operation<'_, u8>],
+    ) -> Result<(), B::Error> {
+        use embedded_hal::spi::Operation;
+        let _ = self.cs.set_low();
+        let r = ops.iter_mut().try_for_each(|op| match op {
+            Operation::Read(b) => self.bus.read(b),
+            Operation::Write(b) => self.bus.write(b),
+            Operation::Transfer(r, w) => self.bus.transfer(r, w),
+            Operation::TransferInPlace(b) => self.bus.transfer_in_place(b),
+            Operation::DelayNs(_) => Ok(()),
+        });
+        let f = self.bus.flush();
+        let _ = self.cs.set_high();
+        r.and(f)
+    }
+}
+
+/// The DMA link to the panel: idle, or sending a buffer.
+enum Link<S: hal::dma::WriteTarget<TransmittedWord = u8>> {
+    Idle(Channel<CH0>, S),
+    Busy(single_buffer::Transfer<Channel<CH0>, Buf, S>),
+}
 
 /// A floor of two Gouraud triangles and a spinning triangle that pierces it.
 fn scene(list: &mut DisplayList<4>, angle: f32) -> Result<(), Error> {
@@ -100,15 +170,24 @@ fn main() -> ! {
         embedded_hal::spi::MODE_0,
     );
     let mut timer = Timer::new(pac.TIMER, &mut pac.RESETS, &clocks);
-    let spi = ExclusiveDevice::new_no_delay(bus, cs).unwrap();
+    let spi = Device { bus, cs };
     let mut buffer = [0u8; 512];
     let di = SpiInterface::new(spi, dc, &mut buffer);
-    let mut display = Builder::new(ST7789, di)
+    let display = Builder::new(ST7789, di)
         .display_size(240, 240)
         .invert_colors(ColorInversion::Inverted)
         .reset_pin(rst)
         .init(&mut timer)
         .unwrap();
+    // Initialised: take the bus back for DMA, chip select held low.
+    let (di, _model, _rst) = display.release();
+    let (spi, mut dc) = di.release();
+    let Device { bus, mut cs } = spi;
+    let _ = cs.set_low();
+    let dma = pac.DMA.split(&mut pac.RESETS);
+    let mut link = Some(Link::Idle(dma.ch0, bus));
+    let mut next: Option<Buf> = cortex_m::singleton!(: [u8; TILE_BYTES] = [0; TILE_BYTES]);
+    let mut spare: Option<Buf> = cortex_m::singleton!(: [u8; TILE_BYTES] = [0; TILE_BYTES]);
     defmt::info!("ST7789 ready; {} bytes per tile", PanelTile::plane_bytes());
 
     // 60x40 tiles: checked against `PanelTile` when compiling.
@@ -118,20 +197,43 @@ fn main() -> ! {
         ..Clear::default()
     };
     let mut tile = PanelTile::new();
+    let mut bins: Bins<64, 36> = Bins::new();
     let mut list: DisplayList<4> = DisplayList::new();
     let mut angle = 0.0f32;
     let mut frames = 0u32;
     let mut since = timer.get_counter();
     loop {
         // Errors are reported, never discarded into a black screen.
-        match scene(&mut list, angle) {
-            // The panel's `DrawTarget<Color = Rgb565>` receives each tile.
-            Ok(()) => match frame.render(&mut tile, &list, &mut display) {
-                Ok(_) => frames += 1,
-                Err(FlushError::Raster(e)) => defmt::error!("raster: {}", e),
-                Err(e) => defmt::error!("display: {}", defmt::Debug2Format(&e)),
-            },
-            Err(e) => defmt::error!("scene: {}", e),
+        let drawn = scene(&mut list, angle)
+            .map_err(FlushError::Raster)
+            .and_then(|()| {
+                frame.render_binned(&mut tile, &mut bins, &list, |t| {
+                    // Pack tile k+1 while tile k is still streaming out...
+                    let buf = next
+                        .take()
+                        .or_else(|| spare.take())
+                        .ok_or("no free buffer")?;
+                    t.panel_bytes(&mut buf[..])
+                        .map_err(|_| "tile larger than a buffer")?;
+                    // ... then wait for it, and send this one.
+                    let (ch, mut bus) = match link.take().ok_or("DMA link lost")? {
+                        Link::Idle(ch, bus) => (ch, bus),
+                        Link::Busy(tr) => {
+                            let (ch, done, bus) = tr.wait();
+                            next = Some(done);
+                            (ch, bus)
+                        }
+                    };
+                    window(&mut bus, &mut dc, t.area());
+                    link = Some(Link::Busy(single_buffer::Config::new(ch, buf, bus).start()));
+                    Ok::<(), &'static str>(())
+                })
+            });
+        match drawn {
+            Ok(_) => frames += 1,
+            Err(FlushError::Raster(e)) => defmt::error!("raster: {}", e),
+            Err(FlushError::Target(e)) => defmt::error!("display: {}", e),
+            Err(e) => defmt::error!("display: {}", defmt::Debug2Format(&e)),
         }
         let now = timer.get_counter();
         let us = (now - since).to_micros();

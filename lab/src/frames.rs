@@ -1,0 +1,228 @@
+//! Whole frames and filled triangles on the host, timed in one run
+//! (median of repeated renders; `tilerast-lab frames`, run by
+//! `cargo xtask report`): the core tiled and binned against one big tile
+//! and against the f64 reference renderer on the seeds' meshes, and
+//! filled triangles against `embedded-graphics` and `tiny-skia`.
+
+use std::time::Instant;
+use tilerast::prelude::*;
+use tilerast_sim::render::render_timed;
+use tilerast_sim::{reference, rng::Rng, Scene};
+
+/// Median wall time of `runs` calls of `f`, in seconds.
+pub fn median(runs: usize, mut f: impl FnMut()) -> f64 {
+    let mut t: Vec<f64> = (0..runs)
+        .map(|_| {
+            let s = Instant::now();
+            f();
+            s.elapsed().as_secs_f64()
+        })
+        .collect();
+    t.sort_by(f64::total_cmp);
+    t[t.len() / 2]
+}
+
+/// One timed scene: core tiled, core as one tile, f64 reference (ms).
+pub struct FrameTimes {
+    /// Scene name.
+    pub name: String,
+    /// Triangles in the scene.
+    pub triangles: usize,
+    /// Core, the scene's tiles, binned.
+    pub tiled_ms: f64,
+    /// Core, one tile the size of the screen.
+    pub whole_ms: f64,
+    /// The f64 reference renderer.
+    pub reference_ms: f64,
+}
+
+/// Times a scene file three ways.
+pub fn frame(
+    path: &std::path::Path,
+    runs: usize,
+) -> Result<FrameTimes, Box<dyn std::error::Error>> {
+    let s = Scene::load(path)?;
+    let cmds = &s.commands;
+    // The pipeline alone (`render_timed`: tiles and bins allocated once,
+    // each finished tile discarded), in seconds per frame.
+    let px = s.config.width as f64 * s.config.height as f64;
+    let timed = |cfg: &tilerast_sim::Config| -> Result<f64, Box<dyn std::error::Error>> {
+        Ok(render_timed(cfg, cmds, runs)?
+            .ns_per_pixel
+            .unwrap_or(f64::NAN)
+            * px
+            * 1e-9)
+    };
+    let tiled = timed(&s.config)?;
+    let mut whole = s.config;
+    whole.tile = (whole.width, whole.height);
+    let whole_t = timed(&whole)?;
+    let reference_t = median(runs.min(5), || {
+        std::hint::black_box(reference::render(&s.config, cmds));
+    });
+    Ok(FrameTimes {
+        name: path
+            .file_stem()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into(),
+        triangles: cmds
+            .iter()
+            .filter(|c| matches!(c, Command::Triangle { .. }))
+            .count(),
+        tiled_ms: tiled * 1e3,
+        whole_ms: whole_t * 1e3,
+        reference_ms: reference_t * 1e3,
+    })
+}
+
+/// Filled triangles, one size class: ns per covered pixel for ours (flat
+/// RGB565, no Z, one 256x256 tile), `embedded-graphics`' `Triangle` into
+/// the same tile as a `DrawTarget`, and `tiny-skia`'s path fill (no AA).
+pub struct FillTimes {
+    /// "small" or "large".
+    pub size: &'static str,
+    /// Approximate pixels per triangle.
+    pub pixels_each: f64,
+    /// Ours.
+    pub ours_ns: f64,
+    /// embedded-graphics.
+    pub eg_ns: f64,
+    /// tiny-skia.
+    pub skia_ns: f64,
+}
+
+/// Times `n` random triangles of about `radius` pixels.
+pub fn fills(size: &'static str, n: usize, radius: i64, runs: usize) -> FillTimes {
+    use embedded_graphics::{pixelcolor::Rgb565, prelude::*, primitives::*};
+    const S: u32 = 256;
+    let mut rng = Rng::new(0xF111_7E57 + radius as u64);
+    let tris: Vec<[(i64, i64); 3]> = (0..n)
+        .map(|_| {
+            let (cx, cy) = (
+                rng.range(radius, S as i64 - radius),
+                rng.range(radius, S as i64 - radius),
+            );
+            [(); 3].map(|_| {
+                (
+                    cx + rng.range(-radius, radius),
+                    cy + rng.range(-radius, radius),
+                )
+            })
+        })
+        .collect();
+    let white = Rgb::new(255, 255, 255);
+    let cmds: Vec<Command> = tris
+        .iter()
+        .map(|t| {
+            Command::triangle(
+                t.map(|(x, y)| Vertex::new(Coord::from_num(x), Coord::from_num(y), 0, white)),
+            )
+        })
+        .collect();
+    type T = Tile<{ groups(256, 256) }, Rgb565Format>;
+    let mut tile: Box<T> = Box::default();
+    let area = Rect::new(0, 0, S, S);
+    // Covered pixels, counted from our own render of each triangle.
+    let mut px = 0u64;
+    for c in &cmds {
+        tile.begin(area, &Clear::default()).unwrap();
+        tile.draw(c).unwrap();
+        px += tile.colors().filter(|c| *c != Rgb565::BLACK).count() as u64;
+    }
+    let ours = median(runs, || {
+        tile.begin(area, &Clear::default()).unwrap();
+        for c in &cmds {
+            tile.draw(std::hint::black_box(c)).unwrap();
+        }
+    });
+    let style = PrimitiveStyle::with_fill(Rgb565::WHITE);
+    let eg = median(runs, || {
+        tile.begin(area, &Clear::default()).unwrap();
+        for t in &tris {
+            let [a, b, c] = t.map(|(x, y)| Point::new(x as i32, y as i32));
+            let _ = Triangle::new(a, b, c).into_styled(style).draw(&mut *tile);
+        }
+    });
+    let mut pixmap = tiny_skia::Pixmap::new(S, S).expect("size");
+    let mut paint = tiny_skia::Paint::default();
+    paint.set_color_rgba8(255, 255, 255, 255);
+    paint.anti_alias = false;
+    let paths: Vec<tiny_skia::Path> = tris
+        .iter()
+        .filter_map(|t| {
+            let mut pb = tiny_skia::PathBuilder::new();
+            pb.move_to(t[0].0 as f32, t[0].1 as f32);
+            pb.line_to(t[1].0 as f32, t[1].1 as f32);
+            pb.line_to(t[2].0 as f32, t[2].1 as f32);
+            pb.close();
+            pb.finish()
+        })
+        .collect();
+    let skia = median(runs, || {
+        pixmap.fill(tiny_skia::Color::BLACK);
+        for p in &paths {
+            pixmap.fill_path(
+                p,
+                &paint,
+                tiny_skia::FillRule::Winding,
+                tiny_skia::Transform::identity(),
+                None,
+            );
+        }
+    });
+    let per = |t: f64| t * 1e9 / px as f64;
+    FillTimes {
+        size,
+        pixels_each: px as f64 / n as f64,
+        ours_ns: per(ours),
+        eg_ns: per(eg),
+        skia_ns: per(skia),
+    }
+}
+
+/// The report: Markdown tables of both measurements.
+pub fn report(
+    scenes: &[std::path::PathBuf],
+    runs: usize,
+) -> Result<String, Box<dyn std::error::Error>> {
+    let mut md = String::from(
+        "# Host frames and fills\n\nGenerated by `tilerast-lab frames` (`cargo xtask report`): medians of \
+         repeated renders in one process (this shared VM varies between runs; compare ratios \
+         within a run).\n\n## Whole frames\n\n| scene | triangles | core, its tiles (binned) ms | \
+         core, one big tile ms | f64 reference ms | tiled / big tile | reference / core |\n\
+         | --- | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+    );
+    for p in scenes {
+        let f = frame(p, runs)?;
+        md += &format!(
+            "| {} | {} | {:.2} | {:.2} | {:.2} | {:.2}x | {:.1}x |\n",
+            f.name,
+            f.triangles,
+            f.tiled_ms,
+            f.whole_ms,
+            f.reference_ms,
+            f.tiled_ms / f.whole_ms,
+            f.reference_ms / f.tiled_ms
+        );
+    }
+    md += "\n## Filled triangles (no antialiasing), ns per covered pixel\n\n\
+           Ours: flat RGB565 triangles into one 256x256 tile (setup included); `embedded-graphics`: \
+           `Triangle` with a fill style into the same tile as a `DrawTarget`; `tiny-skia`: \
+           `fill_path`, anti-alias off, RGBA8888 pixmap.\n\n\
+           | triangles | px each | ours | embedded-graphics | tiny-skia | e-g / ours | tiny-skia / ours |\n\
+           | --- | ---: | ---: | ---: | ---: | ---: | ---: |\n";
+    for f in [fills("small", 4000, 3, runs), fills("large", 200, 60, runs)] {
+        md += &format!(
+            "| {} | {:.0} | {:.2} | {:.2} | {:.2} | {:.2}x | {:.2}x |\n",
+            f.size,
+            f.pixels_each,
+            f.ours_ns,
+            f.eg_ns,
+            f.skia_ns,
+            f.eg_ns / f.ours_ns,
+            f.skia_ns / f.ours_ns
+        );
+    }
+    Ok(md)
+}
