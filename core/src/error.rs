@@ -31,6 +31,10 @@ pub enum Error {
     Malformed,
     /// A scene's configuration does not match the tile types it is rendered with.
     ConfigMismatch,
+    /// A degenerate camera, projection, viewport or direction (a zero
+    /// field of view, `near >= far`, `eye == target`, a zero vector, or a
+    /// non-finite matrix).
+    Degenerate,
 }
 
 impl core::fmt::Display for Error {
@@ -45,6 +49,7 @@ impl core::fmt::Display for Error {
             Error::BufferTooSmall => "output buffer too small",
             Error::Malformed => "malformed encoded data",
             Error::ConfigMismatch => "scene configuration does not match the tile types",
+            Error::Degenerate => "degenerate camera, projection, viewport or direction",
         })
     }
 }

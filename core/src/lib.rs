@@ -79,7 +79,9 @@ pub mod format;
 pub mod geom;
 pub mod numeric;
 
-// The pipeline, in order; a stage imports only the stages before it.
+// The pipeline, in order; a stage imports only the stages before it
+// (the geometry stage, first in the pipeline, implements the frame's
+// `CommandSource`, so it is declared last).
 pub mod bin;
 pub mod command;
 pub mod list;
@@ -90,6 +92,7 @@ pub mod fragment;
 pub use fragment::dither;
 pub mod config;
 pub mod frame;
+pub mod geometry;
 pub mod tile;
 
 // Beside the pipeline.

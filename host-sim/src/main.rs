@@ -32,6 +32,15 @@ enum LineAa {
     Wu,
 }
 
+/// Geometry back ends.
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum Backend {
+    /// Single-precision floats (Cortex-M4F, M7).
+    F32,
+    /// I16F16 fixed point (Cortex-M0).
+    Fixed,
+}
+
 /// A switch.
 #[derive(Clone, Copy, clap::ValueEnum)]
 enum OnOff {
@@ -85,6 +94,35 @@ enum Cmd {
         scene: PathBuf,
         /// Output file.
         #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// Encode an OBJ as a model-space mesh for firmware flash
+    /// (`tilerast::geometry::Mesh`), drawn from any angle by the on-device
+    /// geometry stage.
+    ExportMesh {
+        /// OBJ file (its `.mtl` diffuse colours become the groups' materials).
+        obj: PathBuf,
+        /// Output file.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// Write the firmware's rotating-mesh animation (`tilerast_fw::spin`:
+    /// 240x240 RGB565 + Z16, 64x32 tiles) as an animated PNG: what a board
+    /// shows, frame for frame.
+    Animate {
+        /// An OBJ file, or a mesh written by `export-mesh`.
+        mesh: PathBuf,
+        /// Frames for one full turn.
+        #[arg(long, default_value_t = 48)]
+        frames: u32,
+        /// Frames per second of the animated PNG.
+        #[arg(long, default_value_t = 24)]
+        fps: u16,
+        /// Geometry back end: `f32` (FPU parts) or `fixed` (the M0's).
+        #[arg(long, value_enum, default_value = "f32")]
+        backend: Backend,
+        /// Output (animated PNG).
+        #[arg(short, long, default_value = "spin.png")]
         output: PathBuf,
     },
     /// Compare two PNGs: seed 000 eq. 8 colour error, PSNR, max abs error.
@@ -193,6 +231,48 @@ fn run(cli: Cli) -> tilerast_sim::Result<()> {
                 output.display(),
                 s.commands.len(),
                 bytes.len()
+            );
+        }
+        Cmd::ExportMesh { obj, output } => {
+            let bytes = tilerast_sim::mesh::export_mesh(&obj, &limits)?;
+            std::fs::write(&output, &bytes).map_err(|e| Error::io(&output, e))?;
+            let m = tilerast::geometry::Mesh::parse(&bytes)?;
+            println!(
+                "wrote {} ({} vertices, {} triangles, {} groups, {} bytes)",
+                output.display(),
+                m.vertices(),
+                m.triangles(),
+                m.groups(),
+                bytes.len()
+            );
+        }
+        Cmd::Animate {
+            mesh,
+            frames,
+            fps,
+            backend,
+            output,
+        } => {
+            let bytes = if mesh
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
+            {
+                tilerast_sim::mesh::export_mesh(&mesh, &limits)?
+            } else {
+                tilerast_sim::obj::read_bounded(&mesh, &limits)?
+            };
+            let stats = match backend {
+                Backend::F32 => tilerast_sim::mesh::animate::<f32>(&bytes, frames, fps, &output)?,
+                Backend::Fixed => tilerast_sim::mesh::animate::<tilerast::geometry::Fx>(
+                    &bytes, frames, fps, &output,
+                )?,
+            };
+            let front: u32 = stats.iter().map(|s| s.front).sum();
+            println!(
+                "wrote {} ({} frames of 240x240, {:.0} front-facing triangles per frame on average)",
+                output.display(),
+                stats.len(),
+                front as f64 / stats.len().max(1) as f64
             );
         }
         Cmd::Compare { a, b } => {

@@ -1,10 +1,31 @@
-//! OBJ meshes to Gouraud triangles: a camera, one directional light, and the
-//! `.mtl` diffuse colours — the geometry side of the pipeline, in f64 on the
-//! host (on a device this is the application's job).
+//! OBJ meshes to Gouraud triangles: the OBJ is quantised into the core's
+//! model-space meshes ([`tilerast::geometry::Mesh`]) and drawn by the
+//! core's geometry stage — camera, clipping, culling, lighting — exactly as
+//! a firmware draws them. An f64 path (`geometry = "reference"`) stays as
+//! the reference the core's two back ends are measured against.
 
 use std::path::Path;
+use tilerast::frame::CommandSource;
+use tilerast::geometry::{
+    Angle, Cull, DrawOptions, Fx, Group, Lighting, Mat4, Material, Mesh, MeshData, Real, Scene,
+    VertexSlot,
+};
 use tilerast::line::{EdgeCmd, Side};
 use tilerast::prelude::*;
+
+/// Which geometry stage draws a mesh.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum GeometryKind {
+    /// The core's stage in `f32` (what a Cortex-M4F runs).
+    #[default]
+    F32,
+    /// The core's stage in fixed point (what a Cortex-M0 runs).
+    Fixed,
+    /// The f64 reference (no clipping: triangles crossing the near plane
+    /// are dropped).
+    Reference,
+}
 
 /// How a mesh is placed and lit.
 #[derive(Debug, Clone, PartialEq, serde::Deserialize)]
@@ -70,6 +91,12 @@ pub struct MeshSpec {
     /// (seed 003 eq. 8): their edges are drawn after every solid of the scene.
     #[serde(default)]
     pub edge_aa: bool,
+    /// The geometry stage: `"f32"` (default), `"fixed"` or `"reference"`.
+    #[serde(default)]
+    pub geometry: GeometryKind,
+    /// Add the `.mtl` specular term (`Ks`, `Ns`; Blinn-Phong per vertex).
+    #[serde(default)]
+    pub specular: bool,
 }
 
 impl MeshSpec {
@@ -122,8 +149,11 @@ pub struct MeshStats {
     pub triangles: usize,
     /// Groups (objects) in the file.
     pub groups: usize,
-    /// Triangles dropped: behind the near plane or beyond the guard band.
+    /// Triangles dropped (the reference path: behind the near plane or
+    /// beyond the guard band; the core clips them instead).
     pub dropped: usize,
+    /// Triangles clipped against the near/far planes or the guard band.
+    pub clipped: usize,
     /// Wireframe edges drawn as lines.
     pub lines: usize,
     /// Silhouette and boundary edges found for edge antialiasing.
@@ -219,28 +249,22 @@ pub fn load(
     Ok(build(&obj, spec, screen, out, edges, tags))
 }
 
-/// Places, lights and projects a read OBJ: its triangles (and line
-/// elements) go to `out`, its silhouette edges to `edges` when
-/// `spec.edge_aa`; one object tag per group.
-pub fn build(
-    obj: &crate::obj::Obj,
-    spec: &MeshSpec,
-    screen: (u16, u16),
-    out: &mut Vec<Command>,
-    edges: &mut Vec<Command>,
-    tags: &mut u16,
-) -> MeshStats {
-    let models = &obj.models;
-    let mats = &obj.materials;
-    let mut stats = MeshStats {
-        groups: models.len(),
-        warnings: obj.warnings.clone(),
-        ..Default::default()
-    };
+/// One OBJ group after the geometry stage: its projected vertices (`None`
+/// outside the depth range or guard band), its triangles as drawn (culled
+/// and clipped), the edges of its front faces, and its state.
+struct Projected {
+    verts: Vec<Option<Vertex>>,
+    tris: Vec<[Vertex; 3]>,
+    wire: std::collections::BTreeSet<(u32, u32)>,
+    kd: V3,
+    state: State,
+}
 
-    // Unit cube fit (like GLM's glmUnitize), over the finite vertices.
+/// The unit-cube fit of the finite vertices (like GLM's glmUnitize):
+/// centre and scale.
+fn unit_fit(obj: &crate::obj::Obj) -> (V3, f64) {
     let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
-    for m in models {
+    for m in &obj.models {
         for (p, _) in m.positions.iter().zip(&m.finite).filter(|f| *f.1) {
             for k in 0..3 {
                 lo[k] = lo[k].min(p[k] as f64);
@@ -253,130 +277,236 @@ pub fn build(
         / (0..3)
             .map(|k| hi[k] - lo[k])
             .fold(f64::MIN_POSITIVE, f64::max);
+    (center, scale)
+}
 
-    let (ry, rx) = (spec.rotate_y.to_radians(), spec.rotate_x.to_radians());
-    let rotate = |p: V3| {
-        let (s, c) = rx.sin_cos();
-        let p = [p[0], c * p[1] - s * p[2], s * p[1] + c * p[2]];
-        let (s, c) = ry.sin_cos();
-        [c * p[0] + s * p[2], p[1], -s * p[0] + c * p[2]]
+/// Per-vertex normals of a group: the file's, or area-weighted face normals
+/// of the fitted positions.
+fn normals_of(mesh: &crate::obj::Model, pos: &[V3]) -> Vec<V3> {
+    if !mesh.normals.is_empty() {
+        return mesh
+            .normals
+            .iter()
+            .map(|n| norm([n[0] as f64, n[1] as f64, n[2] as f64]))
+            .collect();
+    }
+    let mut acc = vec![[0.0; 3]; pos.len()];
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|i| pos[i as usize]);
+        let n = cross(sub(b, a), sub(c, a)); // area-weighted
+        for &i in t {
+            acc[i as usize] = std::array::from_fn(|k| acc[i as usize][k] + n[k]);
+        }
+    }
+    acc.into_iter().map(norm).collect()
+}
+
+/// The material of a group: the spec's colour or the `.mtl`'s, ambient =
+/// diffuse, and with `spec.specular` the `.mtl`'s `Ks`/`Ns` (or a white
+/// highlight of exponent 32 when the file has none).
+fn material_of(spec: &MeshSpec, obj: &crate::obj::Obj, mesh: &crate::obj::Model) -> (V3, Material) {
+    let mtl = mesh.material.and_then(|i| obj.materials.get(i));
+    let kd = match (spec.color, mtl.and_then(|m| m.diffuse)) {
+        (Some(c), _) => c.map(|v| v as f64 / 255.0),
+        (None, Some(d)) => d.map(|v| v as f64),
+        (None, None) => [0.8; 3],
     };
-    // Camera basis.
-    let fwd = norm(sub(spec.target, spec.eye));
-    let right = norm(cross(fwd, spec.up));
-    let up = cross(right, fwd);
-    let [vx, vy, vw, vh] = spec
-        .viewport
-        .unwrap_or([0, 0, screen.0 as i32, screen.1 as i32]);
-    let f = 1.0 / (spec.fov.to_radians() / 2.0).tan();
-    let aspect = vw as f64 / vh as f64;
-    let [near, far] = spec.clip;
-    let light = norm(spec.light);
+    let to_rgb = |c: V3| {
+        let q = c.map(|v| (v * 255.0).round().clamp(0.0, 255.0) as u8);
+        Rgb::new(q[0], q[1], q[2])
+    };
+    let mut m = Material::diffuse(to_rgb(kd));
+    if spec.specular {
+        let ks = mtl
+            .and_then(|m| m.specular)
+            .map_or([1.0; 3], |k| k.map(|v| v as f64));
+        m.ks = to_rgb(ks);
+        m.ns = mtl
+            .and_then(|m| m.shininess)
+            .map_or(32.0, |n| n as f64)
+            .round()
+            .clamp(1.0, 255.0) as u8;
+    }
+    (kd, m)
+}
 
-    let mut solids = Vec::new();
-    for mesh in models {
+/// The OBJ as core meshes in model space: positions fitted into the unit
+/// cube and quantised to `i16`, normals to unit `i16`, one mesh group per
+/// OBJ group (split where a mesh reaches 65,535 vertices or triangles).
+/// Each entry: the encoded mesh, and per OBJ group its (mesh, mesh vertex)
+/// of every OBJ vertex and its (mesh, first triangle, triangles) runs.
+pub struct CoreMeshes {
+    /// Encoded meshes ([`tilerast::geometry::Mesh`] format).
+    pub meshes: Vec<Vec<u8>>,
+    /// Per OBJ group, per OBJ vertex: the mesh and its vertex there.
+    pub vertex_map: Vec<Vec<Option<(usize, u16)>>>,
+    /// Per OBJ group: its triangles' runs (mesh, first triangle, count).
+    pub runs: Vec<Vec<(usize, u16, u16)>>,
+    /// Per OBJ group: the diffuse colour, 0..1.
+    pub kd: Vec<V3>,
+}
+
+/// Quantises an OBJ into core meshes ([`CoreMeshes`]).
+pub fn core_meshes(obj: &crate::obj::Obj, spec: &MeshSpec) -> CoreMeshes {
+    let (center, scale) = unit_fit(obj);
+    let q = |v: f64| (v * 32768.0).round().clamp(-32768.0, 32767.0) as i16;
+    let mut out = CoreMeshes {
+        meshes: Vec::new(),
+        vertex_map: Vec::new(),
+        runs: Vec::new(),
+        kd: Vec::new(),
+    };
+    // The mesh being built.
+    #[derive(Default)]
+    struct Building {
+        pos: Vec<[i16; 3]>,
+        nrm: Vec<[i16; 3]>,
+        groups: Vec<Group>,
+        tris: Vec<[u16; 3]>,
+    }
+    let flush = |b: &mut Building, out: &mut CoreMeshes| {
+        if b.groups.is_empty() {
+            return;
+        }
+        let data = MeshData {
+            center: [0; 3],
+            extent: 1 << 16,
+            positions: &b.pos,
+            normals: Some(&b.nrm),
+            colors: None,
+            groups: &b.groups,
+            triangles: &b.tris,
+        };
+        let mut buf = vec![0; data.encoded_len()];
+        data.encode(&mut buf).expect("sizes checked while building");
+        out.meshes.push(buf);
+        *b = Building::default();
+    };
+    let mut b = Building::default();
+    for mesh in &obj.models {
         let pos: Vec<V3> = mesh
             .positions
             .iter()
-            .map(|p| rotate(std::array::from_fn(|k| (p[k] as f64 - center[k]) * scale)))
+            .map(|p| std::array::from_fn(|k| (p[k] as f64 - center[k]) * scale))
             .collect();
-        stats.vertices += pos.len();
-        let normals: Vec<V3> = if !mesh.normals.is_empty() {
-            mesh.normals
+        let normals = normals_of(mesh, &pos);
+        let (kd, material) = material_of(spec, obj, mesh);
+        let mut map: Vec<Option<(usize, u16)>> = vec![None; pos.len()];
+        let mut runs = Vec::new();
+        let mut group: Option<Group> = None;
+        for t in &mesh.triangles {
+            let new_verts = t
                 .iter()
-                .map(|n| norm(rotate([n[0] as f64, n[1] as f64, n[2] as f64])))
-                .collect()
-        } else {
-            let mut acc = vec![[0.0; 3]; pos.len()];
-            for t in &mesh.triangles {
-                let [a, b, c] = t.map(|i| pos[i as usize]);
-                let n = cross(sub(b, a), sub(c, a)); // area-weighted
-                for &i in t {
-                    acc[i as usize] = std::array::from_fn(|k| acc[i as usize][k] + n[k]);
+                .filter(|&&i| map[i as usize].is_none_or(|(m, _)| m != out.meshes.len()))
+                .count();
+            if b.pos.len() + new_verts > u16::MAX as usize || b.tris.len() + 1 > u16::MAX as usize {
+                if let Some(g) = group.take() {
+                    runs.push((out.meshes.len(), g.first_triangle, g.triangles));
+                    b.groups.push(g);
+                }
+                flush(&mut b, &mut out);
+            }
+            let g = group.get_or_insert(Group {
+                first_triangle: b.tris.len() as u16,
+                triangles: 0,
+                first_vertex: b.pos.len() as u16,
+                vertices: 0,
+                material,
+            });
+            let here = out.meshes.len();
+            let idx = t.map(|i| {
+                let i = i as usize;
+                match map[i] {
+                    Some((m, v)) if m == here && v >= g.first_vertex => v,
+                    _ => {
+                        let v = b.pos.len() as u16;
+                        b.pos.push(pos[i].map(q));
+                        b.nrm.push(normals[i].map(|c| (c * 32767.0).round() as i16));
+                        map[i] = Some((here, v));
+                        v
+                    }
+                }
+            });
+            b.tris.push(idx);
+            g.triangles += 1;
+            g.vertices = b.pos.len() as u16 - g.first_vertex;
+        }
+        // Vertices only lines use join the group (never lit: lines take
+        // the unlit diffuse colour).
+        for l in &mesh.lines {
+            for &i in l {
+                let i = i as usize;
+                if map[i].is_none() && b.pos.len() < u16::MAX as usize {
+                    let g = group.get_or_insert(Group {
+                        first_triangle: b.tris.len() as u16,
+                        triangles: 0,
+                        first_vertex: b.pos.len() as u16,
+                        vertices: 0,
+                        material,
+                    });
+                    let v = b.pos.len() as u16;
+                    b.pos.push(pos[i].map(q));
+                    b.nrm.push([0, 0, 32767]);
+                    map[i] = Some((out.meshes.len(), v));
+                    g.vertices = b.pos.len() as u16 - g.first_vertex;
                 }
             }
-            acc.into_iter().map(norm).collect()
-        };
-        let kd = match (
-            spec.color,
-            mesh.material
-                .and_then(|i| mats.get(i))
-                .and_then(|m| m.diffuse),
-        ) {
-            (Some(c), _) => c.map(|v| v as f64 / 255.0),
-            (None, Some(d)) => d.map(|v| v as f64),
-            (None, None) => [0.8; 3],
-        };
-        let verts: Vec<Option<Vertex>> = pos
-            .iter()
-            .zip(&normals)
-            .map(|(&p, &n)| {
-                let d = sub(p, spec.eye);
-                let (cx, cy, cz) = (dot(d, right), dot(d, up), dot(d, fwd));
-                if cz <= near {
-                    return None;
-                }
-                let (nx, ny) = (f / aspect * cx / cz, f * cy / cz);
-                // Depth: 0 at near, 65535 at far, perspective-correct like OpenGL's window z.
-                let zn = (far / (far - near)) * (1.0 - near / cz);
-                let sx = vx as f64 + (nx + 1.0) / 2.0 * vw as f64;
-                let sy = vy as f64 + (1.0 - ny) / 2.0 * vh as f64;
-                let lit = spec.ambient + (1.0 - spec.ambient) * dot(n, light).max(0.0);
-                let color = kd.map(|k| (k * lit * 255.0).round().clamp(0.0, 255.0) as u8);
-                let z = (zn.clamp(0.0, 1.0) * 65535.0).round() as u16;
-                Vertex::try_from_f32(
-                    sx as f32,
-                    sy as f32,
-                    z,
-                    Rgb::new(color[0], color[1], color[2]),
-                )
-                .ok()
-            })
-            .collect();
-        // One object tag per OBJ group (seed 000: fragments of one object
-        // merge in the RUF buffer).
-        let state = State {
-            wid: spec.window,
-            tag: crate::scene::next_tag(tags),
-            ..State::default()
-        };
-        let mut wire = std::collections::BTreeSet::new();
-        for t in &mesh.triangles {
-            stats.triangles += 1;
-            match t.map(|i| verts[i as usize]) {
-                [Some(a), Some(b), Some(c)] => {
-                    let area = |a: Vertex, b: Vertex, c: Vertex| {
-                        let p = |v: Vertex| (v.x.to_bits() as i64, v.y.to_bits() as i64);
-                        let (a, b, c) = (p(a), p(b), p(c));
-                        (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0)
-                    };
-                    // OBJ fronts wind counter-clockwise seen from outside:
-                    // clockwise on the y-down screen, a negative area here.
-                    if spec.cull_back && area(a, b, c) >= 0 {
-                        stats.culled += 1;
-                        continue;
-                    }
-                    if spec.faces {
-                        out.push(Command::Triangle {
-                            v: [a, b, c],
-                            state,
-                        });
-                        solids.push(([a, b, c], state));
-                    }
-                    for (i, j) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
-                        wire.insert((i.min(j), i.max(j)));
-                    }
-                }
-                _ => stats.dropped += 1,
+        }
+        if let Some(g) = group.take() {
+            runs.push((out.meshes.len(), g.first_triangle, g.triangles));
+            b.groups.push(g);
+        }
+        out.vertex_map.push(map);
+        out.runs.push(runs);
+        out.kd.push(kd);
+    }
+    flush(&mut b, &mut out);
+    out
+}
+
+/// Places, lights and projects a read OBJ: its triangles (and line
+/// elements) go to `out`, its silhouette edges to `edges` when
+/// `spec.edge_aa`; one object tag per group. The geometry runs in the
+/// core's stage ([`tilerast::geometry`], `f32` or fixed point per
+/// `spec.geometry`), or in the f64 reference path.
+pub fn build(
+    obj: &crate::obj::Obj,
+    spec: &MeshSpec,
+    screen: (u16, u16),
+    out: &mut Vec<Command>,
+    edges: &mut Vec<Command>,
+    tags: &mut u16,
+) -> MeshStats {
+    let mut stats = MeshStats {
+        groups: obj.models.len(),
+        warnings: obj.warnings.clone(),
+        ..Default::default()
+    };
+    stats.vertices = obj.models.iter().map(|m| m.positions.len()).sum();
+    stats.triangles = obj.models.iter().map(|m| m.triangles.len()).sum();
+    let groups = match spec.geometry {
+        GeometryKind::Reference => project_reference(obj, spec, screen, tags, &mut stats),
+        GeometryKind::F32 => project_core::<f32>(obj, spec, screen, tags, &mut stats),
+        GeometryKind::Fixed => project_core::<Fx>(obj, spec, screen, tags, &mut stats),
+    };
+    let mut solids = Vec::new();
+    for (g, mesh) in groups.iter().zip(&obj.models) {
+        if spec.faces {
+            for t in &g.tris {
+                out.push(Command::Triangle {
+                    v: *t,
+                    state: g.state,
+                });
+                solids.push(*t);
             }
         }
         // The OBJ's own line elements, in the group's unlit colour.
         for l in &mesh.lines {
-            let (Some(a), Some(b)) = (verts[l[0] as usize], verts[l[1] as usize]) else {
+            let (Some(a), Some(b)) = (g.verts[l[0] as usize], g.verts[l[1] as usize]) else {
                 stats.dropped += 1;
                 continue;
             };
-            let c = kd.map(|k| (k * 255.0).round().clamp(0.0, 255.0) as u8);
+            let c = g.kd.map(|k| (k * 255.0).round().clamp(0.0, 255.0) as u8);
             let line = LineCmd {
                 p0: (a.x, a.y),
                 p1: (b.x, b.y),
@@ -386,13 +516,16 @@ pub fn build(
                 antialias: spec.wire_aa,
             };
             if line.validate().is_ok() {
-                out.push(Command::Line { line, state });
+                out.push(Command::Line {
+                    line,
+                    state: g.state,
+                });
                 stats.obj_lines += 1;
             }
         }
         if let Some(rgb) = spec.wireframe {
-            for (i, j) in wire {
-                let (Some(a), Some(b)) = (verts[i as usize], verts[j as usize]) else {
+            for &(i, j) in &g.wire {
+                let (Some(a), Some(b)) = (g.verts[i as usize], g.verts[j as usize]) else {
                     continue;
                 };
                 let line = LineCmd {
@@ -406,18 +539,501 @@ pub fn build(
                     style: LineStyle::SOLID,
                     antialias: spec.wire_aa,
                 };
-                out.push(Command::Line { line, state });
+                out.push(Command::Line {
+                    line,
+                    state: g.state,
+                });
                 stats.lines += 1;
             }
         }
     }
     if spec.edge_aa {
-        let tris: Vec<[Vertex; 3]> = solids.iter().map(|(v, _)| *v).collect();
-        let state = solids.first().map_or(State::default(), |(_, s)| *s);
-        for edge in silhouette_edges(&tris) {
+        let state = groups.first().map_or(State::default(), |g| g.state);
+        for edge in silhouette_edges(&solids) {
             edges.push(Command::Edge { edge, state });
             stats.edges += 1;
         }
     }
     stats
+}
+
+/// A spec's camera in back end `S`: view, projection, viewport, lights and
+/// the model matrix.
+pub type Camera<S> = (Mat4<S>, Mat4<S>, Rect, Lighting<S>, Mat4<S>);
+
+/// The camera of a spec, in back end `S`: view, projection, viewport,
+/// lights and the model matrix (rotation about x, then y).
+pub fn camera_of<S: Real>(
+    spec: &MeshSpec,
+    screen: (u16, u16),
+) -> Result<Camera<S>, tilerast::Error> {
+    let [vx, vy, vw, vh] = spec
+        .viewport
+        .unwrap_or([0, 0, screen.0 as i32, screen.1 as i32]);
+    let s = |v: f64| -> S { S::from_q((v * 65536.0).round() as i64, 16) };
+    let v3 = |v: [f64; 3]| v.map(s);
+    let view = Mat4::look_at(v3(spec.eye), v3(spec.target), v3(spec.up))?;
+    let aspect = s(vw as f64).div(s(vh as f64));
+    let proj = Mat4::perspective(
+        Angle::from_degrees_f32(spec.fov as f32),
+        aspect,
+        s(spec.clip[0]),
+        s(spec.clip[1]),
+    )?;
+    let rect = Rect::new(vx, vy, vw.max(0) as u32, vh.max(0) as u32);
+    let lighting = Lighting::white(v3(spec.light), s(spec.ambient))?;
+    let model = Mat4::rotation_y(Angle::from_degrees_f32(spec.rotate_y as f32)).mul(
+        &Mat4::rotation_x(Angle::from_degrees_f32(spec.rotate_x as f32)),
+    );
+    Ok((view, proj, rect, lighting, model))
+}
+
+/// Vertex cache slots for `meshes`.
+fn slots_for(meshes: &[Mesh<'_>]) -> usize {
+    meshes.iter().map(|m| m.vertices() as usize).sum()
+}
+
+/// A core scene of the spec's camera and light with one draw per mesh
+/// (`None`, with a warning, when the camera is degenerate); a mesh the
+/// stage refuses is left out with a warning.
+fn draw_all<'a, S: Real>(
+    slots: &'a mut [VertexSlot],
+    meshes: &[Mesh<'a>],
+    spec: &MeshSpec,
+    screen: (u16, u16),
+    warnings: &mut Vec<String>,
+) -> Option<Scene<'a, S, 64>> {
+    let (view, proj, rect, lighting, model) = match camera_of::<S>(spec, screen) {
+        Ok(c) => c,
+        Err(e) => {
+            warnings.push(format!("{}: camera: {e}", spec.obj));
+            return None;
+        }
+    };
+    let mut scene: Scene<'_, S, 64> = Scene::new(slots);
+    scene.set_camera(view, proj);
+    if let Err(e) = scene.set_viewport(rect) {
+        warnings.push(format!("{}: viewport: {e}", spec.obj));
+        return None;
+    }
+    scene.set_lighting(lighting);
+    let opts = DrawOptions {
+        state: State {
+            wid: spec.window,
+            ..State::default()
+        },
+        cull: if spec.cull_back {
+            Cull::Back
+        } else {
+            Cull::None
+        },
+        ..DrawOptions::default()
+    };
+    for (k, m) in meshes.iter().enumerate() {
+        if let Err(e) = scene.draw(m, &model, &opts) {
+            warnings.push(format!("{}: mesh part {k}: {e}", spec.obj));
+        }
+    }
+    Some(scene)
+}
+
+/// The core geometry stage over the OBJ's meshes.
+fn project_core<S: Real>(
+    obj: &crate::obj::Obj,
+    spec: &MeshSpec,
+    screen: (u16, u16),
+    tags: &mut u16,
+    stats: &mut MeshStats,
+) -> Vec<Projected> {
+    let cm = core_meshes(obj, spec);
+    let mut groups: Vec<Projected> = cm
+        .kd
+        .iter()
+        .map(|&kd| Projected {
+            verts: Vec::new(),
+            tris: Vec::new(),
+            wire: Default::default(),
+            kd,
+            state: State {
+                wid: spec.window,
+                tag: crate::scene::next_tag(tags),
+                ..State::default()
+            },
+        })
+        .collect();
+    let parsed: Vec<Mesh<'_>> = cm
+        .meshes
+        .iter()
+        .map(|b| Mesh::parse(b).expect("encoded by core_meshes"))
+        .collect();
+    let mut slots = vec![VertexSlot::EMPTY; slots_for(&parsed)];
+    let Some(scene) = draw_all::<S>(&mut slots, &parsed, spec, screen, &mut stats.warnings) else {
+        return groups;
+    };
+    let st = scene.stats();
+    stats.culled = st.culled as usize;
+    stats.clipped = st.clipped as usize;
+    // Projected vertices per OBJ group.
+    for (g, map) in groups.iter_mut().zip(&cm.vertex_map) {
+        g.verts = map
+            .iter()
+            .map(|e| e.and_then(|(m, v)| scene.projected(m, v)))
+            .collect();
+    }
+    // Triangles back to their OBJ group by key: mesh triangle -> run.
+    let mut owner = Vec::new(); // (global first triangle, count, group, mesh, first)
+    let mut bases = vec![0u32; parsed.len() + 1];
+    for (k, m) in parsed.iter().enumerate() {
+        bases[k + 1] = bases[k] + m.triangles() as u32;
+    }
+    for (gi, runs) in cm.runs.iter().enumerate() {
+        for &(m, first, n) in runs {
+            owner.push((bases[m] + first as u32, n as u32, gi, m, first));
+        }
+    }
+    owner.sort();
+    let _ = scene.each_keyed(|key, cmd| {
+        let tri = key >> 3;
+        let at = owner.partition_point(|o| o.0 <= tri).saturating_sub(1);
+        let Some(&(first_global, _, gi, m, first)) = owner.get(at) else {
+            return;
+        };
+        if let Command::Triangle { v, .. } = cmd {
+            let g = &mut groups[gi];
+            g.tris.push(*v);
+            if key & 7 == 0 {
+                // A whole (unclipped) triangle: its edges for the
+                // wireframe, as OBJ vertex indices.
+                let t = parsed[m].triangle(first + (tri - first_global) as u16);
+                let map = &cm.vertex_map[gi];
+                let obj_index = |mv: u16| {
+                    map.iter()
+                        .position(|e| *e == Some((m, mv)))
+                        .map(|i| i as u32)
+                };
+                if let [Some(a), Some(b), Some(c)] = t.map(obj_index) {
+                    for (i, j) in [(a, b), (b, c), (c, a)] {
+                        g.wire.insert((i.min(j), i.max(j)));
+                    }
+                }
+            }
+        }
+    });
+    groups
+}
+
+/// The f64 reference camera and light of a spec.
+struct RefCamera {
+    rx: f64,
+    ry: f64,
+    eye: V3,
+    fwd: V3,
+    right: V3,
+    up: V3,
+    f: f64,
+    aspect: f64,
+    vp: [f64; 4],
+    clip: [f64; 2],
+    light: V3,
+    ambient: f64,
+}
+
+impl RefCamera {
+    fn new(spec: &MeshSpec, screen: (u16, u16)) -> Self {
+        let fwd = norm(sub(spec.target, spec.eye));
+        let right = norm(cross(fwd, spec.up));
+        let [vx, vy, vw, vh] = spec
+            .viewport
+            .unwrap_or([0, 0, screen.0 as i32, screen.1 as i32]);
+        RefCamera {
+            rx: spec.rotate_x.to_radians(),
+            ry: spec.rotate_y.to_radians(),
+            eye: spec.eye,
+            fwd,
+            right,
+            up: cross(right, fwd),
+            f: 1.0 / (spec.fov.to_radians() / 2.0).tan(),
+            aspect: vw as f64 / vh as f64,
+            vp: [vx as f64, vy as f64, vw as f64, vh as f64],
+            clip: spec.clip,
+            light: norm(spec.light),
+            ambient: spec.ambient,
+        }
+    }
+
+    fn rotate(&self, p: V3) -> V3 {
+        let (s, c) = self.rx.sin_cos();
+        let p = [p[0], c * p[1] - s * p[2], s * p[1] + c * p[2]];
+        let (s, c) = self.ry.sin_cos();
+        [c * p[0] + s * p[2], p[1], -s * p[0] + c * p[2]]
+    }
+
+    /// A fitted model point and its normal: screen `x, y` (pixels,
+    /// unrounded), depth in `[0, 1]` (0 at near, hyperbolic like OpenGL's
+    /// window z) and the light factor (ambient + diffuse), or `None` in
+    /// front of the near plane.
+    fn vertex(&self, p: V3, n: V3) -> Option<(f64, f64, f64, f64)> {
+        let (p, n) = (self.rotate(p), self.rotate(n));
+        let d = sub(p, self.eye);
+        let (cx, cy, cz) = (dot(d, self.right), dot(d, self.up), dot(d, self.fwd));
+        let [near, far] = self.clip;
+        if cz <= near {
+            return None;
+        }
+        let (nx, ny) = (self.f / self.aspect * cx / cz, self.f * cy / cz);
+        let zn = (far / (far - near)) * (1.0 - near / cz);
+        let [vx, vy, vw, vh] = self.vp;
+        let sx = vx + (nx + 1.0) / 2.0 * vw;
+        let sy = vy + (1.0 - ny) / 2.0 * vh;
+        let lit = self.ambient + (1.0 - self.ambient) * dot(n, self.light).max(0.0);
+        Some((sx, sy, zn, lit))
+    }
+}
+
+/// How far a geometry back end's vertices are from the f64 reference.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct GeometryError {
+    /// Vertices compared (those both place on screen and that a visible
+    /// triangle uses, so the core lit them).
+    pub vertices: usize,
+    /// Largest screen position error, pixels (Euclidean).
+    pub max_position: f64,
+    /// Mean screen position error, pixels.
+    pub mean_position: f64,
+    /// Largest depth error, 16-bit LSB.
+    pub max_depth: f64,
+    /// Largest colour error, 8-bit LSB (any channel).
+    pub max_color: f64,
+}
+
+/// Measures back end `S` of the core's geometry stage against the f64
+/// reference (unrounded) on every vertex of an OBJ under `spec`: position
+/// error includes the quantisation of the mesh (`2^-15` of its half-size)
+/// and the rasterizer's 1/16-pixel coordinates.
+pub fn geometry_error<S: Real>(
+    obj: &crate::obj::Obj,
+    spec: &MeshSpec,
+    screen: (u16, u16),
+) -> GeometryError {
+    let (center, scale) = unit_fit(obj);
+    let rf = RefCamera::new(spec, screen);
+    let mut tags = 0;
+    let mut stats = MeshStats::default();
+    let groups = project_core::<S>(obj, spec, screen, &mut tags, &mut stats);
+    let mut e = GeometryError::default();
+    let mut sum = 0.0;
+    for (mesh, g) in obj.models.iter().zip(&groups) {
+        let fitted: Vec<V3> = mesh
+            .positions
+            .iter()
+            .map(|p| std::array::from_fn(|k| (p[k] as f64 - center[k]) * scale))
+            .collect();
+        let normals = normals_of(mesh, &fitted);
+        let (kd, _) = material_of(spec, obj, mesh);
+        let used: std::collections::BTreeSet<u32> =
+            g.wire.iter().flat_map(|&(a, b)| [a, b]).collect();
+        for i in used {
+            let i = i as usize;
+            let (Some(v), Some((x, y, z, lit))) = (g.verts[i], rf.vertex(fitted[i], normals[i]))
+            else {
+                continue;
+            };
+            let (dx, dy) = (v.x.to_num::<f64>() - x, v.y.to_num::<f64>() - y);
+            let d = (dx * dx + dy * dy).sqrt();
+            e.vertices += 1;
+            sum += d;
+            e.max_position = e.max_position.max(d);
+            e.max_depth = e.max_depth.max((v.z as f64 - z * 65535.0).abs());
+            let c = [v.color.r, v.color.g, v.color.b];
+            for k in 0..3 {
+                let want = (kd[k] * lit * 255.0).clamp(0.0, 255.0);
+                e.max_color = e.max_color.max((c[k] as f64 - want).abs());
+            }
+        }
+    }
+    e.mean_position = sum / e.vertices.max(1) as f64;
+    e
+}
+
+/// The f64 reference path: camera, one directional light, no clipping
+/// (triangles behind the near plane or beyond the guard band are dropped).
+fn project_reference(
+    obj: &crate::obj::Obj,
+    spec: &MeshSpec,
+    screen: (u16, u16),
+    tags: &mut u16,
+    stats: &mut MeshStats,
+) -> Vec<Projected> {
+    let (center, scale) = unit_fit(obj);
+    let rf = RefCamera::new(spec, screen);
+    let mut out = Vec::new();
+    for mesh in &obj.models {
+        let fitted: Vec<V3> = mesh
+            .positions
+            .iter()
+            .map(|p| std::array::from_fn(|k| (p[k] as f64 - center[k]) * scale))
+            .collect();
+        let normals = normals_of(mesh, &fitted);
+        let (kd, _) = material_of(spec, obj, mesh);
+        let verts: Vec<Option<Vertex>> = fitted
+            .iter()
+            .zip(&normals)
+            .map(|(&p, &n)| {
+                let (sx, sy, zn, lit) = rf.vertex(p, n)?;
+                let color = kd.map(|k| (k * lit * 255.0).round().clamp(0.0, 255.0) as u8);
+                let z = (zn.clamp(0.0, 1.0) * 65535.0).round() as u16;
+                Vertex::try_from_f32(
+                    sx as f32,
+                    sy as f32,
+                    z,
+                    Rgb::new(color[0], color[1], color[2]),
+                )
+                .ok()
+            })
+            .collect();
+        let state = State {
+            wid: spec.window,
+            tag: crate::scene::next_tag(tags),
+            ..State::default()
+        };
+        let mut g = Projected {
+            verts,
+            tris: Vec::new(),
+            wire: Default::default(),
+            kd,
+            state,
+        };
+        for t in &mesh.triangles {
+            match t.map(|i| g.verts[i as usize]) {
+                [Some(a), Some(b), Some(c)] => {
+                    let p = |v: Vertex| (v.x.to_bits() as i64, v.y.to_bits() as i64);
+                    let (pa, pb, pc) = (p(a), p(b), p(c));
+                    let area = (pb.0 - pa.0) * (pc.1 - pa.1) - (pb.1 - pa.1) * (pc.0 - pa.0);
+                    // OBJ fronts wind counter-clockwise seen from outside:
+                    // clockwise on the y-down screen, a negative area here.
+                    if spec.cull_back && area >= 0 {
+                        stats.culled += 1;
+                        continue;
+                    }
+                    g.tris.push([a, b, c]);
+                    for (i, j) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                        g.wire.insert((i.min(j), i.max(j)));
+                    }
+                }
+                _ => stats.dropped += 1,
+            }
+        }
+        out.push(g);
+    }
+    out
+}
+
+/// Reads an OBJ (within `limits`) and encodes it as one core mesh in model
+/// space ([`tilerast::geometry::Mesh`]: fitted into the unit cube,
+/// quantised), for a firmware's flash. A model too large for one mesh
+/// (65,535 vertices or triangles) is refused.
+pub fn export_mesh(path: &Path, limits: &crate::obj::Limits) -> crate::Result<Vec<u8>> {
+    let obj = crate::obj::load(path, limits)?;
+    let spec = MeshSpec::new(&path.to_string_lossy());
+    let mut cm = core_meshes(&obj, &spec);
+    match cm.meshes.len() {
+        1 => Ok(cm.meshes.remove(0)),
+        0 => Err(crate::Error::Unsupported(format!(
+            "{}: no triangles or lines to export",
+            path.display()
+        ))),
+        n => Err(crate::Error::Unsupported(format!(
+            "{}: needs {n} meshes of at most 65,535 vertices and triangles; export writes one",
+            path.display()
+        ))),
+    }
+}
+
+/// Writes `frames` frames of a mesh turning once about `y` (exactly the
+/// firmware's [`tilerast_fw::spin`] animation, back end `S`) as an animated
+/// PNG at `fps` frames per second; returns each frame's geometry stats.
+pub fn animate<S: Real>(
+    mesh_bytes: &[u8],
+    frames: u32,
+    fps: u16,
+    out: &Path,
+) -> crate::Result<Vec<tilerast::geometry::DrawStats>> {
+    use embedded_graphics_core::pixelcolor::Rgb565;
+    use tilerast_fw::spin;
+    let mesh =
+        Mesh::parse(mesh_bytes).map_err(|e| crate::Error::Unsupported(format!("mesh: {e}")))?;
+    let mut slots = vec![VertexSlot::EMPTY; mesh.vertices() as usize];
+    let mut tile: Tile<{ groups(64, 32) }, spin::SpinConfig> = Tile::new();
+    let mut bins: Bins<16384, 32> = Bins::new();
+    let side = spin::SIDE as u32;
+    let file = std::fs::File::create(out).map_err(|e| crate::Error::io(out, e))?;
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), side, side);
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    let png_err = |e: png::EncodingError| crate::Error::Unsupported(format!("png: {e}"));
+    enc.set_animated(frames.max(1), 0).map_err(png_err)?;
+    enc.set_frame_delay(1, fps.max(1)).map_err(png_err)?;
+    let mut w = enc.write_header().map_err(png_err)?;
+    let mut stats = Vec::new();
+    for k in 0..frames.max(1) {
+        let mut display = crate::PngDisplay::<Rgb565>::new(side, side);
+        let f = spin::frame_into::<S, { groups(64, 32) }, 16384, 32, _>(
+            &mesh,
+            &mut slots,
+            &mut tile,
+            &mut bins,
+            (64, 32),
+            (k, frames.max(1)),
+            &mut display,
+            &mut || 0,
+        )
+        .map_err(|e| crate::Error::Unsupported(format!("frame {k}: {e}")))?;
+        stats.push(f.geometry);
+        w.write_image_data(display.image().pixels.as_flattened())
+            .map_err(png_err)?;
+    }
+    w.finish().map_err(png_err)?;
+    Ok(stats)
+}
+
+/// Host nanoseconds per vertex of a geometry stage on an OBJ (median of
+/// `runs`): the core's vertex stage in back end `kind` (transform, cull,
+/// light: [`Scene::draw`]), or the f64 reference's projection and lighting.
+pub fn vertex_stage_ns(
+    obj: &crate::obj::Obj,
+    spec: &MeshSpec,
+    screen: (u16, u16),
+    kind: GeometryKind,
+    runs: usize,
+) -> f64 {
+    fn core<S: Real>(cm: &CoreMeshes, spec: &MeshSpec, screen: (u16, u16)) -> Option<u32> {
+        let parsed: Vec<Mesh<'_>> = cm
+            .meshes
+            .iter()
+            .filter_map(|b| Mesh::parse(b).ok())
+            .collect();
+        let mut slots = vec![VertexSlot::EMPTY; slots_for(&parsed)];
+        let mut warnings = Vec::new();
+        let scene = draw_all::<S>(&mut slots, &parsed, spec, screen, &mut warnings)?;
+        Some(scene.stats().vertices)
+    }
+    let cm = core_meshes(obj, spec);
+    let mut times = Vec::new();
+    let mut vertices = 1u32;
+    for _ in 0..runs.max(1) {
+        let t = std::time::Instant::now();
+        let v = match kind {
+            GeometryKind::F32 => core::<f32>(&cm, spec, screen),
+            GeometryKind::Fixed => core::<Fx>(&cm, spec, screen),
+            GeometryKind::Reference => {
+                let (mut tags, mut st) = (0, MeshStats::default());
+                let g = project_reference(obj, spec, screen, &mut tags, &mut st);
+                Some(g.iter().map(|g| g.verts.len() as u32).sum())
+            }
+        };
+        times.push(t.elapsed().as_nanos() as f64);
+        vertices = v.unwrap_or(1).max(1);
+    }
+    times.sort_by(f64::total_cmp);
+    times[times.len() / 2] / vertices as f64
 }

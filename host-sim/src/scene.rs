@@ -648,8 +648,8 @@ impl Scene {
                     let first_edge = edges.len();
                     edges.extend(found.into_iter().map(|e| (spec.edge_aa, e)));
                     let mut note = format!(
-                        "mesh {}: {} vertices, {} triangles, {} groups, {} dropped (near plane / guard band), {} wireframe lines, {} silhouette edges",
-                        spec.obj, st.vertices, st.triangles, st.groups, st.dropped, st.lines, st.edges,
+                        "mesh {}: {} vertices, {} triangles, {} groups, {} dropped, {} clipped (near/far plane, guard band), {} culled, {} wireframe lines, {} silhouette edges",
+                        spec.obj, st.vertices, st.triangles, st.groups, st.dropped, st.clipped, st.culled, st.lines, st.edges,
                     );
                     if st.obj_lines > 0 {
                         note += &format!(", {} OBJ lines", st.obj_lines);

@@ -32,9 +32,15 @@ pub const MODES: [(AaKind, &str); 4] = [
 
 /// One model's scene: RGB888, Z, back faces culled, OBJ groups as objects.
 pub fn model_scene(obj: &Path) -> Result<Scene, String> {
+    model_scene_with(obj, "f32")
+}
+
+/// [`model_scene`] with the geometry stage `geometry` (`"f32"`,
+/// `"fixed"` or `"reference"`).
+pub fn model_scene_with(obj: &Path, geometry: &str) -> Result<Scene, String> {
     let src = format!(
         "[screen]\nwidth = {}\nheight = {}\nformat = \"rgb888\"\ntile = [64, 32]\nbackground = [16, 16, 24]\n\n\
-         [[command]]\nkind = \"mesh\"\nobj = {:?}\neye = [0.3, 0.4, 3.2]\nfov = 40\ncull_back = true\n",
+         [[command]]\nkind = \"mesh\"\nobj = {:?}\neye = [0.3, 0.4, 3.2]\nfov = 40\ncull_back = true\ngeometry = {geometry:?}\n",
         SIZE.0,
         SIZE.1,
         obj.display().to_string()

@@ -47,6 +47,7 @@ use tilerast::coverage::*;
 use tilerast::line::EdgeCmd;
 use tilerast::prelude::*;
 use tilerast_sim::image::Image;
+use tilerast_sim::mesh::GeometryKind;
 use tilerast_sim::metrics::{box_blur, compare, rms, Diff};
 use tilerast_sim::reference;
 use tilerast_sim::render::{
@@ -105,17 +106,20 @@ pub enum Family {
     Aa,
     /// Line drawing mode.
     Lines,
+    /// The geometry stage's numeric back end (f32, fixed point, f64).
+    Geometry,
 }
 
 impl Family {
     /// Every family, in report order.
-    pub const ALL: [Family; 6] = [
+    pub const ALL: [Family; 7] = [
         Family::ColourBits,
         Family::Depth,
         Family::Subpixel,
         Family::Dither,
         Family::Aa,
         Family::Lines,
+        Family::Geometry,
     ];
     /// Its title.
     pub fn title(self) -> &'static str {
@@ -126,6 +130,7 @@ impl Family {
             Family::Dither => "dither matrix per format",
             Family::Aa => "antialiasing of solids",
             Family::Lines => "lines",
+            Family::Geometry => "geometry back end",
         }
     }
     /// The cost and error its chart and Pareto front use, by name.
@@ -136,6 +141,7 @@ impl Family {
             Family::Subpixel => (Axis::Knob, Axis::IdealMse),
             Family::Dither => (Axis::NsPx, Axis::BlurRms),
             Family::Aa | Family::Lines => (Axis::NsPx, Axis::IdealMse),
+            Family::Geometry => (Axis::NsVertex, Axis::CentreMse),
         }
     }
 }
@@ -157,6 +163,8 @@ pub enum Axis {
     BlurRms,
     /// Visible artifact pixels.
     Artifacts,
+    /// Host nanoseconds per vertex of the geometry stage.
+    NsVertex,
 }
 
 impl Axis {
@@ -170,6 +178,7 @@ impl Axis {
             Axis::IdealMse => "eq.8/px vs 16x16 ideal",
             Axis::BlurRms => "RMS after 8x8 blur",
             Axis::Artifacts => "artifact pixels",
+            Axis::NsVertex => "host ns/vertex",
         }
     }
     /// Its value at a point.
@@ -182,6 +191,7 @@ impl Axis {
             Axis::IdealMse => p.ideal.mse_per_pixel,
             Axis::BlurRms => p.blur_rms,
             Axis::Artifacts => p.artifacts.unwrap_or(0) as f64,
+            Axis::NsVertex => p.ns_vertex.unwrap_or(f64::NAN),
         }
     }
 }
@@ -212,6 +222,8 @@ pub struct Point {
     pub artifacts: Option<u64>,
     /// Host nanoseconds per pixel (median).
     pub ns_px: f64,
+    /// Host nanoseconds per vertex of the geometry stage (geometry knob).
+    pub ns_vertex: Option<f64>,
     /// Tile RAM per pixel, bytes.
     pub bytes_px: f64,
     /// Bytes read and written per frame.
@@ -234,6 +246,8 @@ struct Subject {
     centre_img: Image,
     centre_depth: Vec<f64>,
     centre_blur: Vec<[f64; 3]>,
+    /// Per geometry back end: the scene's commands and host ns/vertex.
+    geometry: Vec<(GeometryKind, Vec<Command>, f64)>,
 }
 
 impl Subject {
@@ -251,6 +265,7 @@ impl Subject {
             centre_blur: box_blur(&centre_img, BLUR),
             centre_img,
             centre_depth: centre.depth,
+            geometry: Vec::new(),
         }
     }
 }
@@ -416,6 +431,8 @@ enum Setting {
     Aa(AaKind, bool),
     /// Format, two-point antialiasing.
     Line(FormatKind, bool),
+    /// The geometry stage's back end.
+    Geometry(GeometryKind),
 }
 
 impl Setting {
@@ -427,6 +444,7 @@ impl Setting {
             Setting::Dither(..) => Family::Dither,
             Setting::Aa(..) => Family::Aa,
             Setting::Line(..) => Family::Lines,
+            Setting::Geometry(_) => Family::Geometry,
         }
     }
     fn label(self) -> String {
@@ -440,6 +458,9 @@ impl Setting {
             Setting::Aa(AaKind::None, true) => "edge AA".into(),
             Setting::Aa(k, _) => k.name().into(),
             Setting::Line(_, wu) => if wu { "Wu" } else { "Bresenham" }.into(),
+            Setting::Geometry(GeometryKind::F32) => "f32 (core)".into(),
+            Setting::Geometry(GeometryKind::Fixed) => "fixed I16F16 (core)".into(),
+            Setting::Geometry(GeometryKind::Reference) => "f64 (reference)".into(),
         }
     }
     /// The label on the chart.
@@ -643,6 +664,18 @@ fn measure(s: &Subject, set: Setting, runs: usize, m4: &[(String, f64)]) -> Resu
             let cfg = Config { format: f, ..base };
             (render_timed(&cfg, &with_line_aa(&s.cmds, wu), runs), None)
         }
+        Setting::Geometry(k) => {
+            let cmds = s
+                .geometry
+                .iter()
+                .find(|g| g.0 == k)
+                .map(|g| g.1.as_slice())
+                .unwrap_or(&s.cmds);
+            (
+                render_timed(&base, cmds, runs),
+                Some(aliased_traffic(cmds, &s.cfg, FormatKind::Rgb888, 2)),
+            )
+        }
     };
     let r = r.map_err(err)?;
     let centre = compare(&r.image, &s.centre_img).map_err(|e| e.to_string())?;
@@ -675,6 +708,10 @@ fn measure(s: &Subject, set: Setting, runs: usize, m4: &[(String, f64)]) -> Resu
         blur_rms: rms(&box_blur(&r.image, BLUR), &s.centre_blur),
         artifacts,
         ns_px: r.ns_per_pixel.unwrap_or(f64::NAN),
+        ns_vertex: match set {
+            Setting::Geometry(k) => s.geometry.iter().find(|g| g.0 == k).map(|g| g.2),
+            _ => None,
+        },
         bytes_px: r.bits_per_pixel as f64 / 8.0,
         traffic,
         m4: set
@@ -747,6 +784,39 @@ pub fn run(opt: &Options) -> Result<Vec<Point>, String> {
             }
         }
     }
+    // The geometry knob: each back end's commands against the references
+    // of the f64 geometry's (so the error is the back end's alone).
+    let mut geometry_subjects = Vec::new();
+    if let Some(dir) = &opt.models {
+        for name in ["teapot", "dolphins"] {
+            let path = dir.join(format!("{name}.obj"));
+            let reference = crate::ruf::model_scene_with(&path, "reference")?;
+            let mut cfg = reference.config;
+            cfg.depth = true;
+            let mut sub = Subject::new(
+                &format!("{name} 256x192, f64 geometry as reference"),
+                cfg,
+                reference.commands.clone(),
+                n,
+            );
+            let obj = tilerast_sim::obj::load(&path, &tilerast_sim::Limits::default())
+                .map_err(|e| e.to_string())?;
+            let mut spec = tilerast_sim::mesh::MeshSpec::new("x.obj");
+            (spec.eye, spec.fov, spec.cull_back) = ([0.3, 0.4, 3.2], 40.0, true);
+            for (k, word) in [
+                (GeometryKind::F32, "f32"),
+                (GeometryKind::Fixed, "fixed"),
+                (GeometryKind::Reference, "reference"),
+            ] {
+                let sc = crate::ruf::model_scene_with(&path, word)?;
+                let ns =
+                    tilerast_sim::mesh::vertex_stage_ns(&obj, &spec, crate::ruf::SIZE, k, opt.runs);
+                sub.geometry.push((k, sc.commands, ns));
+            }
+            subjects.push(sub);
+            geometry_subjects.push(subjects.len() - 1);
+        }
+    }
     let (gradient, luma, crossing, lines) = (0, 1, 2, 3);
     let teapot = models.first().copied();
 
@@ -799,6 +869,15 @@ pub fn run(opt: &Options) -> Result<Vec<Point>, String> {
     for f in [FormatKind::Rgb888, FormatKind::Rgb565] {
         for wu in [false, true] {
             plan.push((lines, Setting::Line(f, wu)));
+        }
+    }
+    for &g in &geometry_subjects {
+        for k in [
+            GeometryKind::Reference,
+            GeometryKind::F32,
+            GeometryKind::Fixed,
+        ] {
+            plan.push((g, Setting::Geometry(k)));
         }
     }
 
@@ -876,11 +955,14 @@ pub fn markdown(points: &[Point]) -> String {
             cx.label()
         );
         for p in rows {
-            let set = if p.pareto {
+            let mut set = if p.pareto {
                 format!("**{}**", p.setting)
             } else {
                 p.setting.clone()
             };
+            if let Some(ns) = p.ns_vertex {
+                set += &format!(", {ns:.1} host ns/vertex");
+            }
             s += &format!(
                 "| {} | {} | {:.1} | {:.2} | {} | {:.2} | {:.2} | {:.3} | {} | {:.2} | {} | {} | {} |\n",
                 p.scene,

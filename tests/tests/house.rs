@@ -136,3 +136,26 @@ fn the_cycle_finder_finds_cycles() {
         BTreeSet::from(["tile".to_string()])
     );
 }
+
+/// The README is what a newcomer reads first: it stays a readable page (a
+/// scripted edit once interleaved a paragraph between its every character,
+/// 22 MB), and it keeps the two commands.
+#[test]
+fn readme_stays_a_readable_page() {
+    let text = std::fs::read_to_string(tilerast_tests::repo().join("README.md")).unwrap();
+    assert!(text.len() < 200_000, "README.md is {} bytes", text.len());
+    assert!(
+        text.starts_with("# tilerast\n"),
+        "README.md starts with its title"
+    );
+    assert!(text.contains("cargo xtask test"));
+    assert!(text.contains("tilerast-sim -- render scenes/demo.toml"));
+    // No paragraph repeated: every line of 60+ characters appears once.
+    let mut seen = BTreeSet::new();
+    for line in text
+        .lines()
+        .filter(|l| l.len() >= 60 && !l.starts_with('|'))
+    {
+        assert!(seen.insert(line), "README.md repeats: {line}");
+    }
+}

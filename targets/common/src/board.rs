@@ -60,6 +60,8 @@ fn stack_used() -> usize {
 static DEMO: &[u8] = include_bytes!(concat!(env!("TILERAST_SCENES"), "/demo.bin"));
 #[cfg(feature = "teapot")]
 static TEAPOT: &[u8] = include_bytes!(concat!(env!("TILERAST_SCENES"), "/teapot.bin"));
+#[cfg(feature = "spin_teapot")]
+static TEAPOT_MESH: &[u8] = include_bytes!(concat!(env!("TILERAST_SCENES"), "/teapot.mesh"));
 #[cfg(feature = "ssd1306")]
 static SSD1306: &[u8] = include_bytes!(concat!(env!("TILERAST_SCENES"), "/ssd1306.bin"));
 
@@ -121,6 +123,10 @@ pub fn run<const ND: usize, const NS: usize, const BC: usize, const BT: usize>(
         crate::report::report_benches(&mut out, &mut clock)?;
         #[cfg(feature = "anim")]
         crate::report::report_anim(&mut out, &mut clock)?;
+        #[cfg(feature = "spin_teapot")]
+        report_spin_teapot::<ND, BC, BT>(demo_tile, &mut out, &mut clock)?;
+        #[cfg(feature = "spin_cube")]
+        report_spin_cube::<ND, BT>(demo_tile, &mut out, &mut clock)?;
         writeln!(out, "stack_used {}", stack_used())?;
         writeln!(out, "done")
     };
@@ -131,4 +137,66 @@ pub fn run<const ND: usize, const NS: usize, const BC: usize, const BT: usize>(
         debug::EXIT_FAILURE
     });
     loop {}
+}
+
+/// Frames of each rotating-mesh run.
+#[cfg(any(feature = "spin_teapot", feature = "spin_cube"))]
+pub const SPIN_FRAMES: u32 = 8;
+
+/// The teapot turning: 8 frames in `f32` (the FPU's back end), and the
+/// vertex stage alone in fixed point for the comparison (a second raster
+/// pipeline would be a second copy in flash).
+#[cfg(feature = "spin_teapot")]
+#[inline(never)]
+fn report_spin_teapot<const N: usize, const BC: usize, const BT: usize>(
+    tile: (u16, u16),
+    out: &mut impl Write,
+    clock: &mut impl Clock,
+) -> core::fmt::Result {
+    use tilerast::geometry::{Fx, Mesh, VertexSlot};
+    let mesh = match Mesh::parse(TEAPOT_MESH) {
+        Ok(m) => m,
+        Err(e) => return writeln!(out, "spin teapot error {e}"),
+    };
+    let mut slots = [VertexSlot::EMPTY; 3648];
+    crate::report::report_spin::<f32, N, BC, BT>(
+        "teapot",
+        &mesh,
+        &mut slots,
+        tile,
+        SPIN_FRAMES,
+        out,
+        clock,
+    )?;
+    crate::report::report_geom::<Fx>("teapot", &mesh, &mut slots, 4, out, clock)
+}
+
+/// The cube turning: 8 frames in fixed point (the M0's back end), and the
+/// vertex stage alone in `f32` (software floats) for the comparison.
+#[cfg(feature = "spin_cube")]
+#[inline(never)]
+fn report_spin_cube<const N: usize, const BT: usize>(
+    tile: (u16, u16),
+    out: &mut impl Write,
+    clock: &mut impl Clock,
+) -> core::fmt::Result {
+    use tilerast::geometry::{Fx, VertexSlot};
+    let mut buf = [0u8; crate::spin::CUBE_BYTES];
+    let mesh = match crate::spin::cube(&mut buf) {
+        Ok(m) => m,
+        Err(e) => return writeln!(out, "spin cube error {e}"),
+    };
+    let mut slots = [VertexSlot::EMPTY; 24];
+    // 12 triangles (a few more where clipped) over a few tiles each: 256
+    // bin entries (2 KB) are plenty.
+    crate::report::report_spin::<Fx, N, 256, BT>(
+        "cube",
+        &mesh,
+        &mut slots,
+        tile,
+        SPIN_FRAMES,
+        out,
+        clock,
+    )?;
+    crate::report::report_geom::<f32>("cube", &mesh, &mut slots, 4, out, clock)
 }

@@ -14,6 +14,8 @@
 //!   and `embedded-graphics`' own triangle fill for comparison).
 //! - [`anim`]: an animated gauge flushed by partial updates (only the
 //!   tiles that changed), with the bytes it saves.
+//! - [`spin`]: a mesh rotating under the on-device geometry stage, frame
+//!   by frame, with the vertex stage and the raster timed apart.
 //! - [`rng`]: the deterministic PRNG those workloads (and the host tests)
 //!   use.
 //! - [`report`]: the lines a firmware prints (scene CRCs, workload ticks),
@@ -29,6 +31,7 @@ pub mod anim;
 pub mod board;
 pub mod report;
 pub mod rng;
+pub mod spin;
 pub mod workloads;
 
 use embedded_graphics::{

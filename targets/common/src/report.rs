@@ -231,3 +231,78 @@ pub fn report_benches(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt
         clock,
     )
 }
+
+/// Prints one line per frame of a rotating mesh drawn by the geometry stage
+/// in back end `S`: `spin NAME backend B frame K crc 0x... vertex_ticks V
+/// raster_ticks R vertices N lit L front F clipped C culled U replayed P`.
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+pub fn report_spin<
+    S: tilerast::geometry::Real,
+    const N: usize,
+    const BC: usize,
+    const BT: usize,
+>(
+    name: &str,
+    mesh: &tilerast::geometry::Mesh<'_>,
+    slots: &mut [tilerast::geometry::VertexSlot],
+    tile: (u16, u16),
+    frames: u32,
+    out: &mut impl Write,
+    clock: &mut impl Clock,
+) -> core::fmt::Result {
+    let mut res = Ok(());
+    let backend = if S::NAME == "f32" { "f32" } else { "fixed" };
+    let r = crate::spin::run::<S, N, BC, BT>(mesh, slots, tile, frames, clock, |k, f| {
+        let g = &f.geometry;
+        res = res.and_then(|()| {
+            writeln!(
+                out,
+                "spin {name} backend {backend} frame {k} frames {frames} crc 0x{:08x} vertex_ticks {} raster_ticks {} \
+                 vertices {} lit {} front {} clipped {} culled {} replayed {}",
+                f.crc,
+                f.vertex_ticks,
+                f.raster_ticks,
+                g.vertices,
+                g.lit,
+                g.front,
+                g.clipped,
+                g.culled,
+                f.frame.replayed
+            )
+        });
+    });
+    res?;
+    match r {
+        Ok(()) => Ok(()),
+        Err(e) => writeln!(out, "spin {name} backend {backend} error {e}"),
+    }
+}
+
+/// Prints `geom NAME backend B frame K frames F vertex_ticks V vertices N
+/// lit L hash 0x...` for `frames` frames of the vertex stage alone
+/// ([`crate::spin::vertex_stage`]): the per-vertex cost of a back end, and
+/// its output checked against the host without rasterizing.
+#[inline(never)]
+pub fn report_geom<S: tilerast::geometry::Real>(
+    name: &str,
+    mesh: &tilerast::geometry::Mesh<'_>,
+    slots: &mut [tilerast::geometry::VertexSlot],
+    frames: u32,
+    out: &mut impl Write,
+    clock: &mut impl Clock,
+) -> core::fmt::Result {
+    let backend = if S::NAME == "f32" { "f32" } else { "fixed" };
+    for k in 0..frames {
+        match crate::spin::vertex_stage::<S>(mesh, slots, (k, frames), clock) {
+            Ok((g, ticks, hash)) => writeln!(
+                out,
+                "geom {name} backend {backend} frame {k} frames {frames} vertex_ticks {ticks} \
+                 vertices {} lit {} hash 0x{hash:08x}",
+                g.vertices, g.lit
+            )?,
+            Err(e) => return writeln!(out, "geom {name} backend {backend} error {e}"),
+        }
+    }
+    Ok(())
+}

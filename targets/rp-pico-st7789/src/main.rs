@@ -1,5 +1,8 @@
 //! tilerast on real hardware: a Raspberry Pi Pico (RP2040, Cortex-M0+, no
-//! FPU) drives a 240x240 ST7789 over SPI. `mipidsi` initialises the panel;
+//! FPU) drives a 240x240 ST7789 over SPI. Each frame the on-device geometry
+//! stage (`tilerast::geometry`, fixed point: no float anywhere) turns a lit
+//! cube — transform, back-face culling, lighting — and the frame pipeline
+//! renders it. `mipidsi` initialises the panel;
 //! then each frame is rendered in 60x40 tiles — 2400 pixels of RGB565 +
 //! 16-bit Z, 9.6 KB — and sent by **DMA while the next tile renders**: the
 //! panel's memory is the front buffer, and two 4.8 KB byte buffers
@@ -17,10 +20,12 @@
 use embedded_hal::digital::OutputPin;
 use embedded_hal::spi::SpiBus;
 use hal::dma::{single_buffer, Channel, DMAExt, CH0};
-use micromath::F32Ext;
 use mipidsi::{interface::SpiInterface, models::ST7789, options::ColorInversion, Builder};
 use rp_pico::entry;
 use rp_pico::hal::{self, clocks::Clock, fugit::RateExtU32, gpio, pac, spi, Timer};
+use tilerast::geometry::{
+    Angle, DrawOptions, Fx, Lighting, Mat4, Mesh, Real, Scene, VertexSlot, CUBE_BYTES,
+};
 use tilerast::prelude::*;
 use {defmt_rtt as _, panic_probe as _};
 
@@ -92,47 +97,26 @@ enum Link<S: hal::dma::WriteTarget<TransmittedWord = u8>> {
     Busy(single_buffer::Transfer<Channel<CH0>, Buf, S>),
 }
 
-/// A floor of two Gouraud triangles and a spinning triangle that pierces it.
-fn scene(list: &mut DisplayList<4>, angle: f32) -> Result<(), Error> {
-    list.clear();
-    let v = |x: f32, y: f32, z: u16, c: (u8, u8, u8)| {
-        Vertex::try_from_f32(x, y, z, Rgb::new(c.0, c.1, c.2))
-    };
-    let floor = [(20, 40, 90), (120, 40, 150), (20, 120, 60), (200, 160, 40)];
-    list.push(Command::Triangle {
-        v: [
-            v(0.0, 120.0, 30000, floor[0])?,
-            v(240.0, 120.0, 30000, floor[1])?,
-            v(0.0, 240.0, 10000, floor[2])?,
-        ],
-        state: State::default(),
-    })?;
-    list.push(Command::Triangle {
-        v: [
-            v(240.0, 120.0, 30000, floor[1])?,
-            v(240.0, 240.0, 10000, floor[3])?,
-            v(0.0, 240.0, 10000, floor[2])?,
-        ],
-        state: State::default(),
-    })?;
-    // Setup-time float math (soft-float on the M0+), never per pixel.
-    let corner = |k: f32| {
-        let a = angle + k * 2.094_395;
-        (
-            120.0 + 100.0 * a.cos(),
-            130.0 + 100.0 * a.sin(),
-            (20000.0 + 15000.0 * a.sin()) as u16,
-        )
-    };
-    let [(x0, y0, z0), (x1, y1, z1), (x2, y2, z2)] = [corner(0.0), corner(1.0), corner(2.0)];
-    list.push(Command::Triangle {
-        v: [
-            v(x0, y0, z0, (255, 40, 40))?,
-            v(x1, y1, z1, (40, 255, 40))?,
-            v(x2, y2, z2, (40, 40, 255))?,
-        ],
-        state: State::default(),
-    })
+/// The camera 3 units away, 40° field of view, and one white light from
+/// the upper left: set once.
+fn camera(scene: &mut Scene<'_, Fx>) -> Result<(), Error> {
+    let q = |v: i32| Fx::from_q(v as i64, 8); // 1/256 units
+    scene.set_camera(
+        Mat4::look_at([q(0), q(0), q(3 * 256)], [q(0); 3], [q(0), q(256), q(0)])?,
+        Mat4::perspective(Angle::degrees(40), Fx::ONE, q(256), q(5 * 256))?,
+    );
+    scene.set_viewport(Rect::new(0, 0, 240, 240))?;
+    scene.set_lighting(Lighting::white([q(-102), q(154), q(256)], q(51))?);
+    Ok(())
+}
+
+/// This frame's draw: the cube turned by `t` about y and half that about x.
+fn turn<'a>(scene: &mut Scene<'a, Fx>, cube: &Mesh<'a>, t: Angle) -> Result<(), Error> {
+    scene.clear();
+    let half = Angle::from_turn_q16(t.turn_q16() / 2);
+    let model = Mat4::rotation_x(half).mul(&Mat4::rotation_y(t));
+    scene.draw(cube, &model, &DrawOptions::default())?;
+    Ok(())
 }
 
 #[entry]
@@ -197,17 +181,23 @@ fn main() -> ! {
         ..Clear::default()
     };
     let mut tile = PanelTile::new();
-    let mut bins: Bins<64, 36> = Bins::new();
-    let mut list: DisplayList<4> = DisplayList::new();
-    let mut angle = 0.0f32;
+    let mut bins: Bins<256, 36> = Bins::new();
+    let mut mesh_buf = [0u8; CUBE_BYTES];
+    let cube = Mesh::cube(&mut mesh_buf).unwrap();
+    let mut slots = [VertexSlot::EMPTY; 24];
+    let mut scene: Scene<'_, Fx> = Scene::new(&mut slots);
+    if let Err(e) = camera(&mut scene) {
+        defmt::error!("camera: {}", e);
+    }
+    let mut angle = Angle::default();
     let mut frames = 0u32;
     let mut since = timer.get_counter();
     loop {
         // Errors are reported, never discarded into a black screen.
-        let drawn = scene(&mut list, angle)
+        let drawn = turn(&mut scene, &cube, angle)
             .map_err(FlushError::Raster)
             .and_then(|()| {
-                frame.render_binned(&mut tile, &mut bins, &list, |t| {
+                frame.render_binned(&mut tile, &mut bins, &scene, |t| {
                     // Pack tile k+1 while tile k is still streaming out...
                     let buf = next
                         .take()
@@ -241,6 +231,6 @@ fn main() -> ! {
             defmt::info!("{} frames/s", frames as u64 * 1_000_000 / us);
             (frames, since) = (0, now);
         }
-        angle += 0.05;
+        angle = angle.add(Angle::degrees(3));
     }
 }

@@ -1,0 +1,836 @@
+//! Geometry on the device (pipeline stage 0): meshes in model space are
+//! transformed, clipped, culled and lit here, so firmware can animate — the
+//! "geometry processor" the seed's raster engine takes its triangles from.
+//!
+//! Per frame the application sets a camera ([`Mat4::look_at`],
+//! [`Mat4::perspective`]), a viewport and lights, then [`Scene::draw`]s
+//! meshes with model matrices. Each draw runs the **vertex stage once**:
+//!
+//! 1. the mesh's box is tested against the view frustum (eight corners,
+//!    outcodes): a mesh wholly outside costs nothing more;
+//! 2. every vertex is transformed to clip space, given an outcode (near,
+//!    far, guard band) and, when inside, projected to the rasterizer's
+//!    sub-pixel coordinates and 16-bit depth, into the **vertex cache**;
+//! 3. one pass over the triangles culls back faces (integer signed area of
+//!    the projected triangle) and marks the vertices that visible triangles
+//!    use;
+//! 4. only marked vertices are lit: ambient + Lambert diffuse + optional
+//!    Blinn-Phong specular per directional light, computed in *model space*
+//!    (the lights are turned into it once per draw), with `.mtl`-style
+//!    [`Material`]s per group.
+//!
+//! The [`Scene`] is then a [`CommandSource`]: the frame pipeline bins and
+//! replays its triangles by key, each built from three cache entries, so a
+//! vertex shared by triangles in several tiles is transformed and lit once
+//! per frame. Triangles that cross the near or far plane or leave the guard
+//! band are clipped in homogeneous space ([`clip`](self) module: split into
+//! up to 7 triangles, never dropped) when they are emitted.
+//!
+//! Numbers: [`f32`] or [`Fx`] ([`real`](Real) docs), chosen by type, e.g.
+//! `Scene<'_, f32>` on a Cortex-M4F and `Scene<'_, Fx>` on an M0.
+//! Both are bit-exact across host and targets. Bad numbers are errors
+//! naming what went wrong ([`DrawError`]), never silent drops.
+//!
+//! ```
+//! use tilerast::geometry::*;
+//! use tilerast::prelude::*;
+//!
+//! // A one-triangle mesh (normally `include_bytes!` of an exported mesh).
+//! let data = MeshData {
+//!     center: [0; 3], extent: 1 << 16,
+//!     positions: &[[-20000, -20000, 0], [20000, -20000, 0], [0, 20000, 0]],
+//!     normals: Some(&[[0, 0, 32767]; 3]), colors: None,
+//!     groups: &[Group { first_triangle: 0, triangles: 1, first_vertex: 0, vertices: 3,
+//!                       material: Material::diffuse(Rgb::new(255, 120, 0)) }],
+//!     triangles: &[[0, 1, 2]],
+//! };
+//! let mut bytes = [0u8; 96];
+//! let n = data.encode(&mut bytes)?;
+//! let mesh = Mesh::parse(&bytes[..n])?;
+//!
+//! let mut slots = [VertexSlot::EMPTY; 16];
+//! let mut scene: Scene<'_, f32> = Scene::new(&mut slots);
+//! scene.set_camera(
+//!     Mat4::look_at([0.0, 0.0, 3.0], [0.0; 3], [0.0, 1.0, 0.0])?,
+//!     Mat4::perspective(Angle::degrees(40), 1.0, 1.0, 5.0)?,
+//! );
+//! scene.set_viewport(Rect::new(0, 0, 64, 64))?;
+//! scene.set_lighting(Lighting::white([0.4, 0.6, 1.0], 0.2)?);
+//! // Per frame: clear, draw with this frame's rotation, render.
+//! scene.clear();
+//! let stats = scene.draw(&mesh, &Mat4::rotation_y(Angle::degrees(30)), &DrawOptions::default())?;
+//! assert_eq!((stats.vertices, stats.front), (3, 1));
+//! let mut tris = 0;
+//! scene.each(|c| if matches!(c, Command::Triangle { .. }) { tris += 1 })?;
+//! assert_eq!(tris, 1);
+//! # Ok::<(), tilerast::Error>(())
+//! ```
+
+mod clip;
+mod math;
+mod mesh;
+mod real;
+
+pub use math::{cross, dot, normalize, sub, Mat4, Vec3};
+pub use mesh::{Group, Material, Mesh, MeshData, CUBE_BYTES};
+pub use real::{Angle, Fx, Real};
+
+use crate::command::{Command, State, Vertex};
+use crate::error::Error;
+use crate::format::Rgb;
+use crate::frame::CommandSource;
+use crate::geom::Rect;
+use crate::numeric::{Coord, COORD_LIMIT};
+use clip::{ClipVertex, ALL};
+
+/// Directional lights a [`Lighting`] holds at most.
+pub const MAX_LIGHTS: usize = 4;
+
+/// A directional light.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Light<S> {
+    /// Unit direction *towards* the light, world space.
+    pub direction: Vec3<S>,
+    /// Intensity per channel, `0..=1` typical.
+    pub color: Vec3<S>,
+}
+
+/// The scene's lights: an ambient term and up to [`MAX_LIGHTS`]
+/// directional lights.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Lighting<S> {
+    /// Ambient intensity per channel (multiplies each material's `ka`).
+    pub ambient: Vec3<S>,
+    /// Directional lights.
+    pub lights: heapless::Vec<Light<S>, MAX_LIGHTS>,
+}
+
+impl<S: Real> Lighting<S> {
+    /// No light at all: every lit surface is black.
+    pub const fn dark() -> Self {
+        Lighting {
+            ambient: [S::ZERO; 3],
+            lights: heapless::Vec::new(),
+        }
+    }
+
+    /// One white light towards `direction` (normalised here) of intensity
+    /// `1 - ambient`, and white ambient light `ambient`: a surface facing
+    /// the light shows its full diffuse colour.
+    pub fn white(direction: Vec3<S>, ambient: S) -> Result<Self, Error> {
+        let mut l = Lighting {
+            ambient: [ambient; 3],
+            lights: heapless::Vec::new(),
+        };
+        l.add(direction, [S::ONE - ambient; 3])?;
+        Ok(l)
+    }
+
+    /// Adds a light towards `direction` (normalised here):
+    /// [`Error::ListFull`] past [`MAX_LIGHTS`], [`Error::Degenerate`] for a
+    /// zero or non-finite direction.
+    pub fn add(&mut self, direction: Vec3<S>, color: Vec3<S>) -> Result<(), Error> {
+        let direction = normalize(direction)?;
+        self.lights
+            .push(Light { direction, color })
+            .map_err(|_| Error::ListFull)
+    }
+}
+
+/// Which triangles a draw culls, by their winding on screen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Cull {
+    /// Draw both sides.
+    None,
+    /// Drop triangles seen from behind (the default).
+    #[default]
+    Back,
+    /// Drop triangles seen from the front.
+    Front,
+}
+
+/// How one draw is rendered.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct DrawOptions {
+    /// Window ID and plane mask of every triangle; a non-zero object tag
+    /// gives group `g` the tag `tag + g` (coverage antialiasing).
+    pub state: State,
+    /// Face culling.
+    pub cull: Cull,
+    /// Fronts wind clockwise in model space (default: counter-clockwise,
+    /// as OBJ and OpenGL).
+    pub clockwise: bool,
+    /// Light the vertices (default); otherwise each vertex takes its
+    /// diffuse colour.
+    pub lit: bool,
+}
+
+impl Default for DrawOptions {
+    fn default() -> Self {
+        DrawOptions {
+            state: State::default(),
+            cull: Cull::Back,
+            clockwise: false,
+            lit: true,
+        }
+    }
+}
+
+/// What one draw (or a whole frame, summed) did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct DrawStats {
+    /// Vertices transformed.
+    pub vertices: u32,
+    /// Vertices lit (those visible triangles use).
+    pub lit: u32,
+    /// Triangles inside the guard band and depth range, facing the camera.
+    pub front: u32,
+    /// Triangles culled by their winding (or degenerate on screen).
+    pub culled: u32,
+    /// Triangles that cross the near or far plane or the guard band: they
+    /// are clipped, not dropped.
+    pub clipped: u32,
+    /// Triangles wholly outside one plane: invisible.
+    pub outside: u32,
+    /// Draws skipped whole because their box is outside the view frustum.
+    pub meshes_culled: u32,
+}
+
+impl DrawStats {
+    fn add(&mut self, o: &DrawStats) {
+        self.vertices += o.vertices;
+        self.lit += o.lit;
+        self.front += o.front;
+        self.culled += o.culled;
+        self.clipped += o.clipped;
+        self.outside += o.outside;
+        self.meshes_culled += o.meshes_culled;
+    }
+}
+
+/// Why a draw was refused.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum DrawError {
+    /// Vertex `vertex` transformed to NaN or infinity (`f32`), or
+    /// overflowed the fixed-point range (`Fx`).
+    NotFinite {
+        /// The vertex's index in its mesh.
+        vertex: u16,
+    },
+    /// The camera, projection or model matrix is not finite, or the
+    /// viewport is empty.
+    Degenerate,
+    /// The vertex cache cannot hold this mesh's vertices.
+    CacheFull {
+        /// Vertices the mesh has.
+        needed: u32,
+        /// Entries left.
+        free: u32,
+    },
+    /// The scene's draw list is full.
+    TooManyDraws,
+}
+
+impl core::fmt::Display for DrawError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            DrawError::NotFinite { vertex } => {
+                write!(f, "vertex {vertex} is not finite after the transform")
+            }
+            DrawError::Degenerate => f.write_str("camera, projection or transform is degenerate"),
+            DrawError::CacheFull { needed, free } => write!(
+                f,
+                "vertex cache full: the mesh has {needed} vertices, {free} entries are free"
+            ),
+            DrawError::TooManyDraws => f.write_str("too many draws in one scene"),
+        }
+    }
+}
+
+impl core::error::Error for DrawError {}
+
+impl From<DrawError> for Error {
+    fn from(e: DrawError) -> Self {
+        match e {
+            DrawError::NotFinite { .. } => Error::NotFinite,
+            DrawError::Degenerate => Error::Degenerate,
+            DrawError::CacheFull { .. } | DrawError::TooManyDraws => Error::ListFull,
+        }
+    }
+}
+
+/// One slot of the vertex cache: a vertex after the vertex stage, 16
+/// bytes. The application lends the scene an array of them
+/// ([`Scene::new`]); its contents are private.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct VertexSlot {
+    /// Sub-pixel position (valid when `code & ALL == 0`).
+    x: i32,
+    y: i32,
+    z: u16,
+    rgb: [u8; 3],
+    /// Outcode bits ([`clip`]); bit 7: a visible triangle uses it.
+    code: u8,
+}
+
+const USED: u8 = 0x80;
+
+impl VertexSlot {
+    /// An empty slot, to initialise the array.
+    pub const EMPTY: VertexSlot = VertexSlot {
+        x: 0,
+        y: 0,
+        z: 0,
+        rgb: [0; 3],
+        code: 0,
+    };
+    fn vertex(&self) -> Vertex {
+        Vertex::new(
+            Coord::from_bits(self.x),
+            Coord::from_bits(self.y),
+            self.z,
+            Rgb::new(self.rgb[0], self.rgb[1], self.rgb[2]),
+        )
+    }
+}
+
+/// The viewport in the back end's numbers.
+#[derive(Debug, Clone, Copy, Default)]
+struct View<S> {
+    /// Centre and half-size, pixels.
+    cx: S,
+    cy: S,
+    hw: S,
+    hh: S,
+    /// Guard band half-size in `w` units per axis.
+    guard: [S; 2],
+}
+
+impl<S: Real> View<S> {
+    /// Projects an inside clip-space point to sub-pixels and depth.
+    #[inline]
+    fn project(&self, p: &[S; 4]) -> Option<(i32, i32, u16)> {
+        let iw = S::ONE.div(p[3]);
+        let x = self.cx + p[0] * iw * self.hw;
+        let y = self.cy - p[1] * iw * self.hh;
+        // round(z * 65535), as one rounding of z * 65535 / 65536 to 16
+        // fraction bits (the factor is exact in both back ends, and
+        // z * 65535 itself would not fit `Fx`).
+        let z = (p[2] * iw).max(S::ZERO).min(S::ONE) * S::from_q(65535, 16);
+        let z = z.to_fixed(16)?.clamp(0, 65535) as u16;
+        Some((x.to_fixed(4)?, y.to_fixed(4)?, z))
+    }
+}
+
+/// A light turned into one draw's model space.
+#[derive(Debug, Clone, Copy, Default)]
+struct ModelLight<S> {
+    dir: Vec3<S>,
+    half: Vec3<S>,
+    color: Vec3<S>,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Draw<'m, S> {
+    mesh: Mesh<'m>,
+    /// Projection * view * model * dequantisation.
+    mvp: Mat4<S>,
+    /// First cache entry.
+    first: u32,
+    /// First triangle key (key = triangle << 3 | piece).
+    tri_base: u32,
+    opts: DrawOptions,
+}
+
+/// A frame's 3D scene: camera, viewport, lights, up to `D` draws of
+/// meshes, and the vertex cache they share — slots the application lends
+/// (16 bytes each: a `static` array on a device, a `Vec` on the host). A
+/// [`CommandSource`] for [`Frame`](crate::frame::Frame)s.
+///
+/// The teapot (3,644 vertices) needs 3,644 slots, 58 KB; a cube with face
+/// normals 24 slots, 384 bytes.
+///
+/// ```
+/// use tilerast::geometry::{Scene, VertexSlot};
+/// let mut slots = [VertexSlot::EMPTY; 24];
+/// let scene: Scene<'_, f32> = Scene::new(&mut slots);
+/// assert_eq!(scene.capacity(), 24);
+/// assert_eq!(core::mem::size_of::<VertexSlot>(), 16);
+/// ```
+pub struct Scene<'a, S: Real, const D: usize = 4> {
+    view: Mat4<S>,
+    proj: Mat4<S>,
+    viewport: View<S>,
+    lighting: Lighting<S>,
+    cache: &'a mut [VertexSlot],
+    used: usize,
+    draws: heapless::Vec<Draw<'a, S>, D>,
+    stats: DrawStats,
+}
+
+impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
+    /// An empty scene over the vertex cache `slots`: identity camera and
+    /// projection, no viewport, no light.
+    pub fn new(slots: &'a mut [VertexSlot]) -> Self {
+        Scene {
+            view: Mat4::IDENTITY,
+            proj: Mat4::IDENTITY,
+            viewport: View::default(),
+            lighting: Lighting::dark(),
+            cache: slots,
+            used: 0,
+            draws: heapless::Vec::new(),
+            stats: DrawStats::default(),
+        }
+    }
+
+    /// Vertex cache slots.
+    pub fn capacity(&self) -> usize {
+        self.cache.len()
+    }
+
+    /// Sets the view (world to camera) and projection matrices. Draws made
+    /// before keep the camera they were made with.
+    pub fn set_camera(&mut self, view: Mat4<S>, projection: Mat4<S>) {
+        self.view = view;
+        self.proj = projection;
+    }
+
+    /// Sets the screen rectangle normalised device coordinates map to
+    /// (`y` up on screen in NDC, down in pixels). [`Error::Degenerate`] for
+    /// an empty one or one beyond the coordinate domain.
+    pub fn set_viewport(&mut self, r: Rect) -> Result<(), Error> {
+        let lim = COORD_LIMIT as i64;
+        let ok = r.w > 0
+            && r.h > 0
+            && r.w <= 4096
+            && r.h <= 4096
+            && (r.x as i64).abs() < lim / 2
+            && (r.y as i64).abs() < lim / 2;
+        if !ok {
+            return Err(Error::Degenerate);
+        }
+        // Twice the centre, in pixels (exact), then halved.
+        let (cx2, cy2) = (2 * r.x + r.w as i32, 2 * r.y + r.h as i32);
+        let (hw, hh) = (S::from_q(r.w as i64, 1), S::from_q(r.h as i64, 1));
+        // Guard band: |centre| + g * half-size stays 64 px inside the
+        // coordinate limit.
+        let room = |c2: i32| S::from_i32(COORD_LIMIT - 64 - (c2.abs() + 1) / 2);
+        self.viewport = View {
+            cx: S::from_q(cx2 as i64, 1),
+            cy: S::from_q(cy2 as i64, 1),
+            hw,
+            hh,
+            guard: [room(cx2).div(hw), room(cy2).div(hh)],
+        };
+        Ok(())
+    }
+
+    /// Sets the lights used by later draws.
+    pub fn set_lighting(&mut self, lighting: Lighting<S>) {
+        self.lighting = lighting;
+    }
+
+    /// Forgets every draw (the start of a frame).
+    pub fn clear(&mut self) {
+        self.used = 0;
+        self.draws.clear();
+        self.stats = DrawStats::default();
+    }
+
+    /// What the draws since [`clear`](Self::clear) did, summed.
+    pub fn stats(&self) -> DrawStats {
+        self.stats
+    }
+
+    /// Draws `mesh` placed by `model`: runs the vertex stage now ([module
+    /// docs](self)) and keeps the mesh's triangles for the frame.
+    pub fn draw(
+        &mut self,
+        mesh: &Mesh<'a>,
+        model: &Mat4<S>,
+        opts: &DrawOptions,
+    ) -> Result<DrawStats, DrawError> {
+        let nv = mesh.vertices() as usize;
+        if self.draws.is_full() {
+            return Err(DrawError::TooManyDraws);
+        }
+        let free = self.cache.len() - self.used;
+        if free < nv {
+            return Err(DrawError::CacheFull {
+                needed: nv as u32,
+                free: free as u32,
+            });
+        }
+        if !real::above(self.viewport.hw, S::ZERO) {
+            return Err(DrawError::Degenerate);
+        }
+        let c = mesh.center().map(|c| S::from_q(c as i64, 16));
+        let e = S::from_q(mesh.extent() as i64, 16);
+        let dequant = Mat4::translation(c).mul(&Mat4::scale([e; 3]));
+        let mvp = self.proj.mul(&self.view).mul(&model.mul(&dequant));
+        if !mvp.is_finite() || !model.is_finite() {
+            return Err(DrawError::Degenerate);
+        }
+        let mut stats = DrawStats::default();
+
+        // 1. The box [-1, 1]^3 (quantised units) against the frustum.
+        let one = [S::ONE; 2];
+        let mut all = ALL;
+        for k in 0..8 {
+            let s = |bit: u32| if k & bit != 0 { S::ONE } else { -S::ONE };
+            all &= clip::outcode(&mvp.transform([s(1), s(2), s(4)]), one);
+        }
+        if all != 0 {
+            stats.meshes_culled = 1;
+            self.stats.add(&stats);
+            return Ok(stats);
+        }
+
+        // 2. Transform and project every vertex into the cache.
+        let first = self.used;
+        let vp = self.viewport;
+        let cache = &mut self.cache[first..first + nv];
+        for (i, slot) in cache.iter_mut().enumerate() {
+            let p = clip_position(mesh, &mvp, i as u16);
+            if !p.iter().all(|v| v.is_finite()) {
+                return Err(DrawError::NotFinite { vertex: i as u16 });
+            }
+            let mut code = clip::outcode(&p, vp.guard);
+            *slot = VertexSlot::EMPTY;
+            if code == 0 {
+                match vp.project(&p) {
+                    Some((x, y, z)) => (slot.x, slot.y, slot.z) = (x, y, z),
+                    // Inside the guard band yet not representable: only a
+                    // w next to 0, i.e. a degenerate projection.
+                    None => code = ALL,
+                }
+            }
+            slot.code = code;
+        }
+        stats.vertices = nv as u32;
+
+        // 3. Cull and mark the vertices visible triangles use.
+        let front_sign = front_sign(opts);
+        for t in 0..mesh.triangles() {
+            let idx = mesh.triangle(t);
+            let v = idx.map(|i| &cache[i as usize]);
+            let (or, and) = (
+                v[0].code | v[1].code | v[2].code,
+                v[0].code & v[1].code & v[2].code,
+            );
+            if and & ALL != 0 {
+                stats.outside += 1;
+                continue;
+            }
+            if or & ALL == 0 {
+                if !faces(area(&v), opts.cull, front_sign) {
+                    stats.culled += 1;
+                    continue;
+                }
+                stats.front += 1;
+            } else {
+                stats.clipped += 1;
+            }
+            for i in idx {
+                cache[i as usize].code |= USED;
+            }
+        }
+
+        // 4. Light the marked vertices, group by group, in model space.
+        let lights = model_lights(&self.lighting, model, &self.view);
+        for g in 0..mesh.groups() {
+            let grp = mesh.group(g);
+            let m = grp.material;
+            for i in grp.first_vertex..grp.first_vertex + grp.vertices {
+                let slot = &mut cache[i as usize];
+                if slot.code & USED == 0 {
+                    continue;
+                }
+                stats.lit += 1;
+                let kd = mesh.color(i).unwrap_or(m.kd);
+                let ka = if mesh.color(i).is_some() { kd } else { m.ka };
+                slot.rgb = match mesh.normal(i).filter(|_| opts.lit) {
+                    Some(n) => shade(n, kd, ka, &m, &lights, &self.lighting.ambient),
+                    None => [kd.r, kd.g, kd.b],
+                };
+            }
+        }
+
+        self.used += nv;
+        let tri_base = self
+            .draws
+            .last()
+            .map_or(0, |d: &Draw<'a, S>| d.tri_base + d.mesh.triangles() as u32);
+        // Checked above: not full.
+        let _ = self.draws.push(Draw {
+            mesh: *mesh,
+            mvp,
+            first: first as u32,
+            tri_base,
+            opts: *opts,
+        });
+        self.stats.add(&stats);
+        Ok(stats)
+    }
+
+    /// The projected vertex `i` of draw `draw` (in draw order since
+    /// [`clear`](Self::clear)), if it lies inside the depth range and guard
+    /// band; its colour is lit only if a visible triangle uses it.
+    pub fn projected(&self, draw: usize, i: u16) -> Option<Vertex> {
+        let d = self.draws.get(draw)?;
+        if i >= d.mesh.vertices() {
+            return None;
+        }
+        let c = self.cache.get(d.first as usize + i as usize)?;
+        (c.code & ALL == 0).then(|| c.vertex())
+    }
+
+    /// Calls `f(key, command)` for the pieces of triangle `t` of draw `d`
+    /// whose piece number passes `want`.
+    fn emit(
+        &self,
+        d: &Draw<'a, S>,
+        t: u16,
+        want: impl Fn(u32) -> bool,
+        f: &mut impl FnMut(u32, &Command),
+    ) {
+        let mesh = &d.mesh;
+        let idx = mesh.triangle(t);
+        let base = &self.cache[d.first as usize..];
+        let v = idx.map(|i| &base[i as usize]);
+        let or = (v[0].code | v[1].code | v[2].code) & ALL;
+        let and = v[0].code & v[1].code & v[2].code & ALL;
+        let key = (d.tri_base + t as u32) << 3;
+        let state = tagged(mesh, &d.opts.state, t);
+        let sign = front_sign(&d.opts);
+        if and != 0 {
+            return;
+        }
+        if or == 0 {
+            if want(0) && faces(area(&v), d.opts.cull, sign) {
+                let cmd = Command::Triangle {
+                    v: v.map(|c| c.vertex()),
+                    state,
+                };
+                f(key, &cmd);
+            }
+            return;
+        }
+        // Clip in homogeneous space, then fan.
+        let tri = core::array::from_fn(|k| ClipVertex {
+            p: clip_position(mesh, &d.mvp, idx[k]),
+            c: v[k].rgb.map(|c| S::from_i32(c as i32)),
+        });
+        let poly = clip::clip(tri, or, self.viewport.guard);
+        if poly.n < 3 {
+            return;
+        }
+        let proj = |cv: &ClipVertex<S>| -> Option<VertexSlot> {
+            let (x, y, z) = self.viewport.project(&cv.p)?;
+            let rgb = cv.c.map(|c| c.to_fixed(0).unwrap_or(0).clamp(0, 255) as u8);
+            Some(VertexSlot {
+                x,
+                y,
+                z,
+                rgb,
+                code: 0,
+            })
+        };
+        let Some(a) = proj(&poly.v[0]) else { return };
+        for piece in 1..poly.n - 1 {
+            if !want(piece as u32 - 1) {
+                continue;
+            }
+            let (Some(b), Some(c)) = (proj(&poly.v[piece]), proj(&poly.v[piece + 1])) else {
+                continue;
+            };
+            let tri = [&a, &b, &c];
+            if !faces(area(&tri), d.opts.cull, sign) {
+                continue;
+            }
+            let cmd = Command::Triangle {
+                v: tri.map(|c| c.vertex()),
+                state,
+            };
+            if cmd.validate().is_ok() {
+                f(key | (piece as u32 - 1), &cmd);
+            }
+        }
+    }
+}
+
+/// The clip-space position of vertex `i`.
+#[inline]
+fn clip_position<S: Real>(mesh: &Mesh<'_>, mvp: &Mat4<S>, i: u16) -> [S; 4] {
+    let q = mesh.position(i);
+    mvp.transform(q.map(|c| S::from_q(c as i64, 15)))
+}
+
+/// Twice the signed screen area (y down), sub-pixels squared.
+#[inline]
+fn area(v: &[&VertexSlot; 3]) -> i64 {
+    let (ax, ay) = (v[0].x as i64, v[0].y as i64);
+    (v[1].x as i64 - ax) * (v[2].y as i64 - ay) - (v[1].y as i64 - ay) * (v[2].x as i64 - ax)
+}
+
+/// The sign of [`area`] for a front face: counter-clockwise fronts (seen
+/// with y up) wind clockwise on the y-down screen, a negative area.
+fn front_sign(o: &DrawOptions) -> i64 {
+    if o.clockwise {
+        1
+    } else {
+        -1
+    }
+}
+
+/// Whether a triangle of signed area `a` is drawn under `cull`.
+#[inline]
+fn faces(a: i64, cull: Cull, front: i64) -> bool {
+    a != 0
+        && match cull {
+            Cull::None => true,
+            Cull::Back => a.signum() == front,
+            Cull::Front => a.signum() != front,
+        }
+}
+
+/// The state of triangle `t`: group `g`'s tag is `tag + g` when tagged.
+fn tagged(mesh: &Mesh<'_>, state: &State, t: u16) -> State {
+    if state.tag == 0 || mesh.groups() == 1 {
+        return *state;
+    }
+    let g = (0..mesh.groups())
+        .find(|&g| {
+            let grp = mesh.group(g);
+            t < grp.first_triangle + grp.triangles
+        })
+        .unwrap_or(0);
+    State {
+        tag: state.tag.wrapping_add(g),
+        ..*state
+    }
+}
+
+/// The lights in model space (for a rotation and uniform scale the
+/// transposed 3x3 is the inverse up to scale), with Blinn's half vectors
+/// for a viewer at infinity along the camera's axis.
+fn model_lights<S: Real>(
+    l: &Lighting<S>,
+    model: &Mat4<S>,
+    view: &Mat4<S>,
+) -> heapless::Vec<ModelLight<S>, MAX_LIGHTS> {
+    // Towards the camera, world space: the view matrix's third row.
+    let eye = [view.m[2][0], view.m[2][1], view.m[2][2]];
+    let mut out = heapless::Vec::new();
+    for light in &l.lights {
+        let dir = normalize(model.transform_dir_transposed(light.direction));
+        let h = [
+            light.direction[0] + eye[0],
+            light.direction[1] + eye[1],
+            light.direction[2] + eye[2],
+        ];
+        let half = normalize(model.transform_dir_transposed(h));
+        if let (Ok(dir), Ok(half)) = (dir, half) {
+            let _ = out.push(ModelLight {
+                dir,
+                half,
+                color: light.color,
+            });
+        } else if let Ok(dir) = dir {
+            // Light exactly opposite the viewer: no highlight.
+            let _ = out.push(ModelLight {
+                dir,
+                half: [S::ZERO; 3],
+                color: light.color,
+            });
+        }
+    }
+    out
+}
+
+/// Ambient + Lambert + Blinn-Phong of one vertex, 0..255 per channel.
+#[inline]
+fn shade<S: Real>(
+    n: [i16; 3],
+    kd: Rgb,
+    ka: Rgb,
+    m: &Material,
+    lights: &[ModelLight<S>],
+    ambient: &Vec3<S>,
+) -> [u8; 3] {
+    let n = n.map(|c| S::from_q(c as i64, 15));
+    let (mut diff, mut spec) = ([S::ZERO; 3], [S::ZERO; 3]);
+    let specular = m.ks != Rgb::new(0, 0, 0);
+    for l in lights {
+        let ndl = dot(n, l.dir);
+        if ndl > S::ZERO {
+            for (d, c) in diff.iter_mut().zip(l.color) {
+                *d = *d + c * ndl;
+            }
+            if specular {
+                let ndh = dot(n, l.half);
+                if ndh > S::ZERO {
+                    let p = powi(ndh, m.ns.max(1));
+                    for (s, c) in spec.iter_mut().zip(l.color) {
+                        *s = *s + c * p;
+                    }
+                }
+            }
+        }
+    }
+    let ch = |c: Rgb| [c.r, c.g, c.b].map(|v| S::from_i32(v as i32));
+    let (kd, ka, ks) = (ch(kd), ch(ka), ch(m.ks));
+    core::array::from_fn(|k| {
+        let v = ka[k] * ambient[k] + kd[k] * diff[k] + ks[k] * spec[k];
+        v.to_fixed(0).unwrap_or(255).clamp(0, 255) as u8
+    })
+}
+
+/// `x^e` by squaring.
+fn powi<S: Real>(x: S, mut e: u8) -> S {
+    let (mut acc, mut b) = (S::ONE, x);
+    while e > 0 {
+        if e & 1 != 0 {
+            acc = acc * b;
+        }
+        b = b * b;
+        e >>= 1;
+    }
+    acc
+}
+
+impl<S: Real, const D: usize> CommandSource for Scene<'_, S, D> {
+    fn each_keyed(&self, mut f: impl FnMut(u32, &Command)) -> Result<(), Error> {
+        for d in &self.draws {
+            for t in 0..d.mesh.triangles() {
+                self.emit(d, t, |_| true, &mut f);
+            }
+        }
+        Ok(())
+    }
+
+    fn replay(&self, keys: impl Iterator<Item = u32>, mut f: impl FnMut(&Command)) {
+        let mut di = 0;
+        for key in keys {
+            let tri = key >> 3;
+            while di + 1 < self.draws.len() && tri >= self.draws[di + 1].tri_base {
+                di += 1;
+            }
+            let Some(d) = self.draws.get(di) else { return };
+            let Some(t) = tri.checked_sub(d.tri_base) else {
+                continue;
+            };
+            if t >= d.mesh.triangles() as u32 {
+                continue;
+            }
+            let piece = key & 7;
+            self.emit(d, t as u16, |p| p == piece, &mut |_, c| f(c));
+        }
+    }
+}
