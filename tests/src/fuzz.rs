@@ -11,6 +11,7 @@
 //! | [`tile_api`] | a sequence of tile calls | results match the documented contract (begin's errors, reads inside the area only, flush size) |
 //! | [`scene`] | scene-file text | parse errors, not panics; a parsed scene renders and survives the wire round trip |
 //! | [`obj`] | OBJ text | every index in range; the mesh builds and renders |
+//! | [`mesh()`] | a model-space mesh and camera parameters | parse and draw errors, not panics; every emitted triangle valid; keys increase and replay to the same commands; tiling changes nothing |
 
 use crate::{config, random_command, Rng};
 use tilerast::prelude::*;
@@ -344,4 +345,82 @@ pub fn obj(data: &[u8]) -> bool {
     c.tile = (16, 16);
     tiling_is_invisible(&c, &cmds).expect("built meshes are valid");
     !cmds.is_empty()
+}
+
+/// A model-space mesh (`tilerast::geometry::Mesh`, firmware flash) drawn
+/// by the geometry stage: the first 8 bytes choose the back end, culling,
+/// rotation, eye distance and clip planes; the rest is the mesh. Parsing
+/// and drawing never panic (overflow checks on); every emitted triangle is
+/// valid; keys strictly increase and replaying them gives the same
+/// commands; tiling changes nothing.
+pub fn mesh(data: &[u8]) -> bool {
+    use tilerast::geometry::{Fx, Mesh};
+    if data.len() < 8 {
+        return false;
+    }
+    let (p, bytes) = data.split_at(8);
+    let Ok(m) = Mesh::parse(bytes) else {
+        return false;
+    };
+    let drawn = if p[0] & 1 == 0 {
+        mesh_frame::<f32>(&m, p)
+    } else {
+        mesh_frame::<Fx>(&m, p)
+    };
+    let Some(cmds) = drawn else {
+        return false; // a documented DrawError
+    };
+    let mut c = config(48, 32, FormatKind::Rgb565);
+    c.depth = true;
+    c.tile = (16, 8);
+    tiling_is_invisible(&c, &cmds);
+    !cmds.is_empty()
+}
+
+/// Draws `m` under the parameters `p`; `None` when the stage refuses.
+fn mesh_frame<S: tilerast::geometry::Real>(
+    m: &tilerast::geometry::Mesh<'_>,
+    p: &[u8],
+) -> Option<Vec<Command>> {
+    use tilerast::frame::CommandSource;
+    use tilerast::geometry::*;
+    let q = |v: i32| S::from_q(v as i64, 4); // 1/16 units
+    let mut slots = vec![VertexSlot::EMPTY; m.vertices() as usize];
+    let mut scene: Scene<'_, S> = Scene::new(&mut slots);
+    let eye = q(1 + p[2] as i32); // 1/16 .. 16 units
+    let (near, far) = (
+        q(1 + (p[3] % 32) as i32),
+        q(2 + (p[3] % 32) as i32 + p[4] as i32),
+    );
+    let view = Mat4::look_at([q(0), q(0), eye], [q(0); 3], [q(0), q(16), q(0)]).ok()?;
+    let proj = Mat4::perspective(Angle::degrees(10 + p[5] as i32 % 160), S::ONE, near, far).ok()?;
+    scene.set_camera(view, proj);
+    scene.set_viewport(Rect::new(-8, -4, 64, 40)).ok()?;
+    scene.set_lighting(Lighting::white([q(-5), q(9), q(16)], q(3)).ok()?);
+    let cull = [Cull::Back, Cull::Front, Cull::None][p[1] as usize % 3];
+    let opts = DrawOptions {
+        cull,
+        clockwise: p[1] & 4 != 0,
+        state: State {
+            tag: (p[1] >> 4) as u16,
+            ..State::default()
+        },
+        lit: p[1] & 8 == 0,
+    };
+    let model = Mat4::rotation_x(Angle::from_turn_q16(u16::from_le_bytes([p[6], p[7]])))
+        .mul(&Mat4::rotation_y(Angle::from_turn_q16((p[6] as u16) << 8)));
+    scene.draw(m, &model, &opts).ok()?;
+    let mut keyed = Vec::new();
+    scene
+        .each_keyed(|k, c| {
+            assert!(c.validate().is_ok(), "invalid command {c:?}");
+            keyed.push((k, *c));
+        })
+        .expect("a drawn scene walks");
+    assert!(keyed.windows(2).all(|w| w[0].0 < w[1].0), "keys increase");
+    let mut again = Vec::new();
+    scene.replay(keyed.iter().map(|k| k.0), |c| again.push(*c));
+    let cmds: Vec<Command> = keyed.into_iter().map(|k| k.1).collect();
+    assert_eq!(again, cmds, "replay by key gives the walked commands");
+    Some(cmds)
 }

@@ -10,12 +10,13 @@ use tilerast_tests::{fuzz, repo, Rng};
 
 type Body = fn(&[u8]) -> bool;
 
-const TARGETS: [(&str, Body); 5] = [
+const TARGETS: [(&str, Body); 6] = [
     ("wire", fuzz::wire),
     ("commands", fuzz::commands),
     ("tile_api", fuzz::tile_api),
     ("scene", fuzz::scene),
     ("obj", fuzz::obj),
+    ("mesh", fuzz::mesh),
 ];
 
 /// Mutations per stored input (more with `FUZZ_REPLAY_MUTATIONS`).
@@ -87,6 +88,7 @@ corpus_tests! {
     tile_api_corpus: 2;
     scene_corpus: 3;
     obj_corpus: 4;
+    mesh_corpus: 5;
 }
 
 #[test]

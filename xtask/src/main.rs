@@ -433,7 +433,7 @@ fn demo() -> Result<(), String> {
 }
 
 /// The cargo-fuzz targets (`fuzz/fuzz_targets/*.rs`).
-const FUZZ_TARGETS: [&str; 5] = ["wire", "commands", "tile_api", "scene", "obj"];
+const FUZZ_TARGETS: [&str; 6] = ["wire", "commands", "tile_api", "scene", "obj", "mesh"];
 
 fn fuzz(args: &[String]) -> Result<(), String> {
     let mut seconds = 60u64;
