@@ -374,3 +374,56 @@ const F32_Z: f64 = 1.25;
 const FX_Z: f64 = 6.0;
 const F32_RGB: f64 = 1.25;
 const FX_RGB: f64 = 1.25;
+
+/// Lighting: ambient + Lambert per light, summed, and a Blinn-Phong
+/// highlight only where the material has `Ks`.
+#[test]
+fn lights_add_and_specular_needs_ks() {
+    let lit = |ks: Rgb, second: bool| -> Rgb {
+        let data = MeshData {
+            center: [0; 3],
+            extent: 1 << 16,
+            positions: &[[-16000, -16000, 0], [16000, -16000, 0], [0, 16000, 0]],
+            normals: Some(&[[0, 0, 32767]; 3]),
+            colors: None,
+            groups: &[Group {
+                first_triangle: 0,
+                triangles: 1,
+                first_vertex: 0,
+                vertices: 3,
+                material: Material {
+                    kd: Rgb::new(100, 100, 100),
+                    ka: Rgb::new(100, 100, 100),
+                    ks,
+                    ns: 16,
+                },
+            }],
+            triangles: &[[0, 1, 2]],
+        };
+        let mut buf = [0u8; 128];
+        let n = data.encode(&mut buf).unwrap();
+        let mesh = Mesh::parse(&buf[..n]).unwrap();
+        let mut slots = [VertexSlot::EMPTY; 3];
+        let mut scene: Scene<'_, f32> = Scene::new(&mut slots);
+        scene.set_camera(
+            Mat4::look_at([0.0, 0.0, 3.0], [0.0; 3], [0.0, 1.0, 0.0]).unwrap(),
+            Mat4::perspective(Angle::degrees(40), 1.0, 1.0, 5.0).unwrap(),
+        );
+        scene.set_viewport(Rect::new(0, 0, 64, 64)).unwrap();
+        // Towards the camera: N.L = N.H = 1 at every vertex.
+        let mut l = Lighting::white([0.0, 0.0, 1.0], 0.2).unwrap();
+        if second {
+            l.add([1.0, 0.0, 0.0], [0.5; 3]).unwrap(); // grazing: N.L = 0
+            l.add([0.0, 0.6, 0.8], [0.25; 3]).unwrap(); // N.L = 0.8
+        }
+        scene.set_lighting(l);
+        scene.draw(&mesh, &Mat4::IDENTITY, &DrawOptions::default()).unwrap();
+        scene.projected(0, 0).unwrap().color
+    };
+    // 100 * 0.2 ambient + 100 * 0.8 diffuse = 100.
+    assert_eq!(lit(Rgb::new(0, 0, 0), false), Rgb::new(100, 100, 100));
+    // + 0.25 * 0.8 * 100 = 20 from the third light; the grazing one adds 0.
+    assert_eq!(lit(Rgb::new(0, 0, 0), true), Rgb::new(120, 120, 120));
+    // + Ks * 0.8 * (N.H)^16 = 60 * 0.8 = 48 of highlight, red only.
+    assert_eq!(lit(Rgb::new(60, 0, 0), false), Rgb::new(148, 100, 100));
+}
