@@ -304,10 +304,19 @@ impl Angle {
         let d = d.rem_euclid(360) as u32;
         Angle(((d * 65536 + 180) / 360) as u16)
     }
-    /// Degrees as a float, rounded to the nearest step (NaN gives 0).
+    /// Degrees as a float, rounded to the nearest step and reduced modulo a
+    /// turn; NaN and infinities give 0°, and so do angles of more than 32,767
+    /// turns, whose step exceeds a degree in `f32` anyway.
+    ///
+    /// ```
+    /// use tilerast::geometry::Angle;
+    /// assert_eq!(Angle::from_degrees_f32(-90.0), Angle::degrees(270));
+    /// assert_eq!(Angle::from_degrees_f32(720.0 + 45.0), Angle::degrees(45));
+    /// assert_eq!(Angle::from_degrees_f32(f32::NAN), Angle::degrees(0));
+    /// ```
     pub fn from_degrees_f32(d: f32) -> Self {
-        let turns = d / 360.0;
-        let q = (turns * 65536.0).to_fixed(0).unwrap_or(0);
+        // Q16 of a turn as an i32 (exact wrap modulo 2^16 below).
+        let q = (d / 360.0 * 65536.0).to_fixed(0).unwrap_or(0);
         Angle(q as u16)
     }
     /// The angle in units of `1 / 65536` turn.
