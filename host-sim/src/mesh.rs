@@ -280,6 +280,14 @@ fn unit_fit(obj: &crate::obj::Obj) -> (V3, f64) {
     (center, scale)
 }
 
+/// A group's positions in the unit cube of [`unit_fit`].
+fn fitted(mesh: &crate::obj::Model, center: V3, scale: f64) -> Vec<V3> {
+    mesh.positions
+        .iter()
+        .map(|p| std::array::from_fn(|k| (p[k] as f64 - center[k]) * scale))
+        .collect()
+}
+
 /// Per-vertex normals of a group: the file's, or area-weighted face normals
 /// of the fitted positions.
 fn normals_of(mesh: &crate::obj::Model, pos: &[V3]) -> Vec<V3> {
@@ -384,11 +392,7 @@ pub fn core_meshes(obj: &crate::obj::Obj, spec: &MeshSpec) -> CoreMeshes {
     };
     let mut b = Building::default();
     for mesh in &obj.models {
-        let pos: Vec<V3> = mesh
-            .positions
-            .iter()
-            .map(|p| std::array::from_fn(|k| (p[k] as f64 - center[k]) * scale))
-            .collect();
+        let pos = fitted(mesh, center, scale);
         let normals = normals_of(mesh, &pos);
         let (kd, material) = material_of(spec, obj, mesh);
         let mut map: Vec<Option<(usize, u16)>> = vec![None; pos.len()];
@@ -823,11 +827,7 @@ pub fn geometry_error<S: Real>(
     let mut e = GeometryError::default();
     let mut sum = 0.0;
     for (mesh, g) in obj.models.iter().zip(&groups) {
-        let fitted: Vec<V3> = mesh
-            .positions
-            .iter()
-            .map(|p| std::array::from_fn(|k| (p[k] as f64 - center[k]) * scale))
-            .collect();
+        let fitted = fitted(mesh, center, scale);
         let normals = normals_of(mesh, &fitted);
         let (kd, _) = material_of(spec, obj, mesh);
         let used: std::collections::BTreeSet<u32> =
@@ -868,11 +868,7 @@ fn project_reference(
     let rf = RefCamera::new(spec, screen);
     let mut out = Vec::new();
     for mesh in &obj.models {
-        let fitted: Vec<V3> = mesh
-            .positions
-            .iter()
-            .map(|p| std::array::from_fn(|k| (p[k] as f64 - center[k]) * scale))
-            .collect();
+        let fitted = fitted(mesh, center, scale);
         let normals = normals_of(mesh, &fitted);
         let (kd, _) = material_of(spec, obj, mesh);
         let verts: Vec<Option<Vertex>> = fitted

@@ -417,7 +417,9 @@ fn lights_add_and_specular_needs_ks() {
             l.add([0.0, 0.6, 0.8], [0.25; 3]).unwrap(); // N.L = 0.8
         }
         scene.set_lighting(l);
-        scene.draw(&mesh, &Mat4::IDENTITY, &DrawOptions::default()).unwrap();
+        scene
+            .draw(&mesh, &Mat4::IDENTITY, &DrawOptions::default())
+            .unwrap();
         scene.projected(0, 0).unwrap().color
     };
     // 100 * 0.2 ambient + 100 * 0.8 diffuse = 100.
