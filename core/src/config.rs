@@ -25,7 +25,8 @@
 //! against the type at compile time.
 
 use crate::format::{
-    BinaryFormat, Gray8Format, PixelFormat, Rgb444Format, Rgb565Format, Rgb888Format,
+    BinaryFormat, Gray8Format, PixelFormat, Rgb444Format, Rgb444PairFormat, Rgb565Format,
+    Rgb888Format,
 };
 use crate::fragment::dither::{Bayer4, Dither, NoDither};
 use crate::fragment::{Depth16, DepthMode, NoDepth, NoWid, WidMode};
@@ -90,6 +91,7 @@ format_configs!(
     Rgb888Format,
     Rgb565Format,
     Rgb444Format,
+    Rgb444PairFormat,
     Gray8Format,
     BinaryFormat
 );

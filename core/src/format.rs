@@ -90,6 +90,14 @@ pub trait PixelFormat: 'static {
     /// Splits a packed pixel into its channel values (each `0..=MAX`): what
     /// blending reads back.
     fn unpack(raw: u32) -> Self::Lanes;
+    /// The channel values a write through `mask` (within [`Self::MASK_ALL`])
+    /// reads back when it blends: [`Self::unpack`], except for formats
+    /// that keep several images in one cell ([`Rgb444PairFormat`]).
+    #[inline(always)]
+    fn unpack_masked(raw: u32, mask: u32) -> Self::Lanes {
+        let _ = mask;
+        Self::unpack(raw)
+    }
 
     /// A flat colour, rounded to nearest, packed: what fills write (the seed's
     /// fill bypasses the interpolating channels and the dither).
@@ -269,6 +277,112 @@ impl PixelFormat for BinaryFormat {
     }
     fn unpack(raw: u32) -> [i32; 1] {
         [raw as i32 & 1]
+    }
+}
+
+/// One 12-bit half of an [`Rgb444PairFormat`] cell: the front or back
+/// buffer of the seed's double buffering.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Half {
+    /// Bits 0..12.
+    Low,
+    /// Bits 12..24.
+    High,
+}
+
+impl Half {
+    /// The plane mask that writes this half only (a command's
+    /// [`State::plane_mask`](crate::command::State::plane_mask)).
+    pub const fn mask(self) -> u32 {
+        0xFFF << self.shift()
+    }
+    /// The other half: the back buffer becomes the front after a frame.
+    pub const fn other(self) -> Half {
+        match self {
+            Half::Low => Half::High,
+            Half::High => Half::Low,
+        }
+    }
+    const fn shift(self) -> u32 {
+        match self {
+            Half::Low => 0,
+            Half::High => 12,
+        }
+    }
+}
+
+/// The seed's double buffer (seed 001 §II.2, "image plane split in two"):
+/// one 24-bit plane (3 bytes a pixel) holding **two RGB444 images**, a front
+/// buffer being shown while the back one is drawn. Each half is 12-bit
+/// colour; an ordered dither ([`Bayer8`](crate::fragment::dither::Bayer8))
+/// makes it look close to 24-bit, as REjr does. Use it for a frame buffer
+/// in RAM that a display controller scans out (one half at a time), when
+/// two RGB565 buffers do not fit: 3 bytes a pixel instead of 4.
+///
+/// A frame draws into the back half by giving every command that half's
+/// plane mask ([`Half::mask`]: clear it with a masked `Fill` and `ZFill`,
+/// not [`Tile::begin`](crate::tile::Tile::begin), which clears both). An
+/// unmasked write fills both halves. Blending (edge and Wu antialiasing)
+/// reads the half it writes. [`PixelFormat::to_color`] reads the low half;
+/// [`Rgb444PairFormat::half`] either one.
+///
+/// ```
+/// use tilerast::prelude::*;
+/// use tilerast::format::{Half, Rgb444, Rgb444PairFormat};
+/// let mut tile: Tile<2, Rgb444PairFormat> = Tile::new(); // 16 pixels
+/// tile.begin(Rect::new(0, 0, 4, 4), &Clear::default())?;
+/// let mut back = State::new(0);
+/// back.plane_mask = Half::High.mask();
+/// tile.draw(&Command::Fill { rect: Rect::new(0, 0, 4, 4), color: Rgb::new(255, 0, 0), state: back })?;
+/// let raw = tile.raw(1, 1).unwrap();
+/// assert_eq!(Rgb444PairFormat::half(raw, Half::High), Rgb444::new(15, 0, 0)); // drawn
+/// assert_eq!(Rgb444PairFormat::half(raw, Half::Low), Rgb444::new(0, 0, 0)); // untouched
+/// # Ok::<(), Error>(())
+/// ```
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Rgb444PairFormat;
+
+impl Rgb444PairFormat {
+    /// The colour one half of a packed cell holds.
+    pub const fn half(raw: u32, h: Half) -> Rgb444 {
+        Rgb444((raw >> h.shift()) as u16 & 0xFFF)
+    }
+}
+
+impl PixelFormat for Rgb444PairFormat {
+    type Color = Rgb444;
+    type Plane<const N: usize> = Plane<[u8; 3], N>;
+    type Lanes = [i32; 3];
+    const MAX: [i32; 3] = [15, 15, 15];
+    const MASK_ALL: u32 = 0xFF_FFFF;
+    const NAME: &'static str = "rgb444x2";
+    #[inline(always)]
+    fn lanes_from_rgb(rgb: [i64; 3]) -> [i32; 3] {
+        Rgb444Format::lanes_from_rgb(rgb)
+    }
+    #[inline(always)]
+    fn pack(q: [i32; 3]) -> u32 {
+        let c = Rgb444Format::pack(q);
+        c | c << 12
+    }
+    #[inline]
+    fn to_color(raw: u32) -> Rgb444 {
+        Self::half(raw, Half::Low)
+    }
+    #[inline]
+    fn from_color(c: Rgb444) -> u32 {
+        let c = c.0 as u32;
+        c | c << 12
+    }
+    #[inline]
+    fn unpack(raw: u32) -> [i32; 3] {
+        Rgb444Format::unpack(raw & 0xFFF)
+    }
+    #[inline(always)]
+    fn unpack_masked(raw: u32, mask: u32) -> [i32; 3] {
+        let h = if mask & 0xFFF == 0 { 12 } else { 0 };
+        Rgb444Format::unpack((raw >> h) & 0xFFF)
     }
 }
 

@@ -112,8 +112,8 @@ pub mod prelude {
     pub use crate::config::{groups, Planes, Ssd1306Config, St7789Config, TileConfig};
     pub use crate::error::{Error, FlushError};
     pub use crate::format::{
-        BinaryFormat, Gray8Format, PixelFormat, Rgb, Rgb444, Rgb444Format, Rgb565Format,
-        Rgb888Format,
+        BinaryFormat, Gray8Format, Half, PixelFormat, Rgb, Rgb444, Rgb444Format, Rgb444PairFormat,
+        Rgb565Format, Rgb888Format,
     };
     pub use crate::fragment::dither::{Bayer, Bayer2, Bayer4, Bayer8, Dither, NoDither};
     pub use crate::fragment::{

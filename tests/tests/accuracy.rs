@@ -45,3 +45,19 @@ fn longest_span_drift_stays_within_bound() {
     let (c, z) = check(4096, 2, (4096, 2), v).unwrap();
     println!("longest span: colour error {c:.4} LSB, Z error {z:.4} LSB");
 }
+
+#[test]
+fn largest_stepped_triangle_drift_stays_within_bound() {
+    // The largest triangle set up in 32 bits (box just under 1024 px a
+    // side), with steep ramps: every pixel's colour and Z come from the
+    // anchor plane (`c + i gc + j gcy`), whose drift is at most one
+    // half-unit per step along x and y plus the anchor's own rounding.
+    let s = 16383i64;
+    let v = [
+        vsub(0, 0, 0, [0, 255, 7]),
+        vsub(s, 40, 65000, [255, 0, 200]),
+        vsub(30, s, 31000, [128, 3, 90]),
+    ];
+    let (c, z) = check(1024, 1024, (64, 32), v).unwrap();
+    println!("largest stepped triangle: colour error {c:.4} LSB, Z error {z:.4} LSB");
+}

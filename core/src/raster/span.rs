@@ -46,22 +46,35 @@ impl<L: Lanes> SpanStart<L> {
     /// point, before [`Self::advanced`], so tiling cannot change the result.
     #[inline(always)]
     pub fn quantized<P: Precision>(self) -> Self {
-        let (cd, zd) = (
-            COLOR_FRAC.saturating_sub(P::COLOR_BITS),
-            Z_FRAC.saturating_sub(P::Z_BITS),
-        );
-        let q = |v: i32, drop: u32| {
-            if drop == 0 {
-                v
-            } else {
-                v.wrapping_add(1 << (drop - 1)) & !((1 << drop) - 1)
-            }
-        };
         SpanStart {
-            c: self.c.map(|v| q(v, cd)),
-            dc: self.dc.map(|v| q(v, cd)),
-            z: q(self.z, zd),
-            dz: q(self.dz, zd),
+            c: quantize_color::<P, L>(self.c),
+            dc: quantize_color::<P, L>(self.dc),
+            z: quantize_z::<P>(self.z),
+            dz: quantize_z::<P>(self.dz),
         }
     }
+}
+
+/// Rounds `v` to nearest at `2^drop` (modulo 2^32, so a wrapped plane value
+/// rounds like the value it stands for).
+#[inline(always)]
+fn round_at(v: i32, drop: u32) -> i32 {
+    if drop == 0 {
+        v
+    } else {
+        v.wrapping_add(1 << (drop - 1)) & !((1 << drop) - 1)
+    }
+}
+
+/// Colour lanes (16 fraction bits) rounded to the `P::COLOR_BITS` the DDA
+/// keeps.
+#[inline(always)]
+pub(crate) fn quantize_color<P: Precision, L: Lanes>(c: L) -> L {
+    c.map(|v| round_at(v, COLOR_FRAC.saturating_sub(P::COLOR_BITS)))
+}
+
+/// Z (16.14) rounded to the `P::Z_BITS` the DDA keeps.
+#[inline(always)]
+pub(crate) fn quantize_z<P: Precision>(z: i32) -> i32 {
+    round_at(z, Z_FRAC.saturating_sub(P::Z_BITS))
 }

@@ -19,7 +19,7 @@ use crate::fragment::{DepthMode, DepthPlane, WidMode, WidPlane};
 use crate::geom::Rect;
 use crate::numeric::{Precision, COLOR_FRAC, SUBPIXEL as SUBPIXEL_I64, Z_FRAC};
 use crate::raster::coverage::{AaMode, AaPlane};
-use crate::raster::span::SpanStart;
+use crate::raster::span::{quantize_color, quantize_z, SpanStart};
 use crate::raster::traverse::{Row, Spans};
 use crate::setup::{fits_i32, EdgeInt, TriangleSetup};
 
@@ -146,6 +146,17 @@ where
     #[inline(always)]
     fn triangle<T: EdgeInt>(&mut self, t: &TriangleSetup<F::Lanes, T>, st: &State) {
         let area = self.area;
+        // Small triangles: the anchored planes, rounded once to the DDA's
+        // precision; each row's start is `c + i gc + j gcy` (modulo 2^32).
+        let plane = SpanStart {
+            c: t.c,
+            dc: t.gc,
+            z: t.z,
+            dz: t.gz,
+        }
+        .quantized::<P>();
+        let (gcy, gzy) = (quantize_color::<P, _>(t.gcy), quantize_z::<P>(t.gzy));
+        let (ax, ay) = (t.bounds.x as i64, t.bounds.y as i64);
         for Row {
             py,
             xr,
@@ -155,18 +166,28 @@ where
             e2,
         } in Spans::new(&t.e, &t.bounds, &area)
         {
-            // Restart from the plane equation at xr, then advance to x0 by
-            // multiplication: exactly the values x0 - xr DDA steps give, so
-            // the output does not depend on the tiling.
-            let (c, z) = t.start(e1, e2);
-            let start = SpanStart {
-                c,
-                dc: t.gc,
-                z,
-                dz: t.gz,
-            }
-            .quantized::<P>()
-            .advanced(x0 - xr);
+            let start = if T::EXACT_ROWS {
+                // Restart from the plane equation at xr, then advance to x0
+                // by multiplication: exactly the values x0 - xr DDA steps
+                // give, so the output does not depend on the tiling.
+                let (c, z) = t.start(e1, e2);
+                SpanStart {
+                    c,
+                    dc: t.gc,
+                    z,
+                    dz: t.gz,
+                }
+                .quantized::<P>()
+                .advanced(x0 - xr)
+            } else {
+                let j = (py - ay) as i32;
+                SpanStart {
+                    c: plane.c.zip(gcy, |c, g| c.wrapping_add(j.wrapping_mul(g))),
+                    z: plane.z.wrapping_add(j.wrapping_mul(gzy)),
+                    ..plane
+                }
+                .advanced(x0 - ax)
+            };
             self.span(x0, py, x1 - x0, start, st);
         }
     }
@@ -279,7 +300,7 @@ where
         if !self.wid.pass(idx, st.wid) || !self.depth.test(idx, z + (1 << (Z_FRAC - 1))) {
             return;
         }
-        let old = F::unpack(self.color.get(idx));
+        let old = F::unpack_masked(self.color.get(idx), st.plane_mask & F::MASK_ALL);
         let bias = round_bias::<D>();
         // (line - old) has at most 8 integer bits; dropping 8 of its 16
         // fraction bits keeps the product with w <= 256 within i32.

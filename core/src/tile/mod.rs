@@ -387,6 +387,39 @@ where
         (0..a.area() as usize).fold(h, |h, i| mix(h, self.color.get(i)))
     }
 
+    /// Flushes the tile to a display with `color` converting each packed
+    /// pixel ([`Tile::raw`]): e.g. the front half of an
+    /// [`Rgb444PairFormat`](crate::format::Rgb444PairFormat) plane.
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// use embedded_graphics_core::{pixelcolor::Rgb888, prelude::*};
+    /// # struct Screen(Vec<Rgb888>);
+    /// # impl OriginDimensions for Screen { fn size(&self) -> Size { Size::new(4, 4) } }
+    /// # impl DrawTarget for Screen {
+    /// #     type Color = Rgb888; type Error = core::convert::Infallible;
+    /// #     fn draw_iter<I: IntoIterator<Item = Pixel<Rgb888>>>(&mut self, p: I) -> Result<(), Self::Error> {
+    /// #         self.0.extend(p.into_iter().map(|p| p.1)); Ok(()) }
+    /// # }
+    /// let mut tile: Tile<2, Rgb444PairFormat> = Tile::new();
+    /// tile.begin(Rect::new(0, 0, 4, 4), &Clear { color: Rgb::new(255, 255, 255), ..Clear::default() })?;
+    /// let mut screen = Screen(vec![]);
+    /// let high = |raw| Rgb444PairFormat::half(raw, Half::High).into();
+    /// tile.flush_with(&mut screen, high).unwrap();
+    /// assert!(screen.0.iter().all(|&c| c == Rgb888::WHITE));
+    /// # Ok::<(), Error>(())
+    /// ```
+    pub fn flush_with<T: DrawTarget>(
+        &self,
+        target: &mut T,
+        color: impl Fn(u32) -> T::Color,
+    ) -> Result<(), T::Error> {
+        let a = self.area;
+        let rect = Rectangle::new(Point::new(a.x, a.y), Size::new(a.w, a.h));
+        let raw = (0..a.area() as usize).map(|i| color(self.color.get(i)));
+        target.fill_contiguous(&rect, raw)
+    }
+
     /// Flushes the tile to a display: one `fill_contiguous` over the tile
     /// rectangle, converting each pixel to the display's colour type.
     pub fn flush<T>(&self, target: &mut T) -> Result<(), T::Error>

@@ -3,7 +3,9 @@
 //! the host with any clock, so the host computes the CRCs the boards must
 //! print.
 
-use crate::workloads::{self, EDGE_AA_CMDS, FILL_CMDS, LINE_CMDS, TRIANGLE_CMDS, WU_LINE_CMDS};
+use crate::workloads::{
+    self, EDGE_AA_CMDS, FILL_CMDS, LARGE_TRIANGLE_CMDS, LINE_CMDS, TRIANGLE_CMDS, WU_LINE_CMDS,
+};
 use crate::{run_scene, Clock, SceneRun};
 use core::fmt::Write;
 use embedded_graphics::{pixelcolor::IntoStorage, prelude::Size};
@@ -179,7 +181,8 @@ fn bench_one<C: TileConfig>(
 
 /// Prints `bench NAME ticks T` for each workload: flat fill; Gouraud
 /// alone, with Z, with Z and window ID, and with those and 8x8 dither (all
-/// RGB565), and with Z and every edge antialiased; the same triangles through `embedded-graphics`' `Triangle`
+/// RGB565); large Gouraud triangles alone, with Z, and with Z, window ID
+/// and dither; and with Z and every edge antialiased; the same triangles through `embedded-graphics`' `Triangle`
 /// fill; lines, Bresenham and two-point (Wu) antialiased, and the same
 /// lines through `embedded-graphics`' `Line`.
 pub fn report_benches(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt::Result {
@@ -210,6 +213,22 @@ pub fn report_benches(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt
     bench_one::<Planes<Rgb565Format, Depth16, Wid8, Bayer8>>(
         "gouraud_z_wid_dither8_rgb565",
         tris,
+        Via::Ours,
+        out,
+        clock,
+    )?;
+    let large: &[Command] = &LARGE_TRIANGLE_CMDS;
+    bench_one::<Rgb565Format>("large_gouraud_rgb565", large, Via::Ours, out, clock)?;
+    bench_one::<Planes<Rgb565Format, Depth16, NoWid, NoDither>>(
+        "large_gouraud_z_rgb565",
+        large,
+        Via::Ours,
+        out,
+        clock,
+    )?;
+    bench_one::<Planes<Rgb565Format, Depth16, Wid8, Bayer8>>(
+        "large_gouraud_z_wid_dither8_rgb565",
+        large,
         Via::Ours,
         out,
         clock,

@@ -19,6 +19,8 @@ pub const SIDE: u32 = 32;
 pub const TRIANGLES: usize = 64;
 /// Full-tile fills per workload.
 pub const FILLS: usize = 8;
+/// Large triangles per workload: pairs that each cover the whole tile.
+pub const LARGE_TRIANGLES: usize = 8;
 /// Lines per workload.
 pub const LINES: usize = 48;
 
@@ -28,6 +30,11 @@ pub static TRIANGLE_CMDS: [Command; TRIANGLES] = TRIANGLE_CMDS_CONST;
 /// The same triangles followed by all their edges, antialiased (seed 003
 /// eq. 8): what edge antialiasing adds, at its most (every edge).
 pub static EDGE_AA_CMDS: [Command; 4 * TRIANGLES] = with_edges();
+/// Large Gouraud triangles: [`LARGE_TRIANGLES`] / 2 pairs, each pair
+/// splitting the whole tile along a diagonal, random colours, each pair
+/// nearer than the last (every pixel passes the Z test and is stored: the
+/// per-pixel cost of a span, with few rows and setups to share it).
+pub static LARGE_TRIANGLE_CMDS: [Command; LARGE_TRIANGLES] = large_triangles();
 /// Full-tile flat fills.
 pub static FILL_CMDS: [Command; FILLS] = fills();
 /// Lines across the tile in every direction, Bresenham.
@@ -94,6 +101,35 @@ const fn triangles() -> [Command; TRIANGLES] {
             state: State::new(0),
         };
         i += 1;
+    }
+    out
+}
+
+const fn corner(x: i32, y: i32, z: u16, rng: &mut Rng) -> Vertex {
+    Vertex::new(Coord::from_bits(x), Coord::from_bits(y), z, rng.rgb())
+}
+
+const fn large_triangles() -> [Command; LARGE_TRIANGLES] {
+    let mut rng = Rng::new(0x6c61_7267_6574_7269);
+    let side = SIDE as i32 * 16;
+    let mut out = [Command::WidFill {
+        rect: Rect::new(0, 0, 0, 0),
+        wid: 0,
+    }; LARGE_TRIANGLES];
+    let mut i = 0;
+    while i < LARGE_TRIANGLES {
+        let z = 60000 - 7000 * (i / 2) as u16;
+        let (a, c) = (corner(0, 0, z, &mut rng), corner(side, side, z, &mut rng));
+        let (b, d) = (corner(side, 0, z, &mut rng), corner(0, side, z, &mut rng));
+        out[i] = Command::Triangle {
+            v: [a, b, c],
+            state: State::new(0),
+        };
+        out[i + 1] = Command::Triangle {
+            v: [a, c, d],
+            state: State::new(0),
+        };
+        i += 2;
     }
     out
 }
