@@ -159,10 +159,16 @@ pub(crate) fn div_round(n: i64, d: i64) -> i64 {
     div_floor(n + d / 2, d)
 }
 
-/// The high 64 bits of `a b` (four `umull`s on the Cortex-M4).
+/// The high 64 bits of `a b`, from four 32x32-bit products: four `umull`s
+/// on the Cortex-M4, four multiply calls on the Cortex-M0 (where a `u128`
+/// product is a general 128-bit multiply, twice the calls; measured).
 #[inline(always)]
 fn mul_high(a: u64, b: u64) -> u64 {
-    ((a as u128 * b as u128) >> 64) as u64
+    let (a0, a1) = (a & 0xffff_ffff, a >> 32);
+    let (b0, b1) = (b & 0xffff_ffff, b >> 32);
+    let (p01, p10) = (a0 * b1, a1 * b0);
+    let mid = ((a0 * b0) >> 32) + (p01 & 0xffff_ffff) + (p10 & 0xffff_ffff);
+    a1 * b1 + (p01 >> 32) + (p10 >> 32) + (mid >> 32)
 }
 
 /// Many divisions by one positive divisor `d` (a triangle's doubled area):
@@ -190,7 +196,14 @@ impl Divisor {
     #[inline(always)]
     fn floor_u(&self, n: u64) -> u64 {
         let q = mul_high(n, self.r);
-        if n - q * self.d >= self.d {
+        // The remainder `n - q d` lies in `[0, 2d)`: for `d < 2^31` (every
+        // small triangle) it is exact in 32-bit arithmetic, one multiply.
+        let carry = if self.d < 1 << 31 {
+            (n as u32).wrapping_sub((q as u32).wrapping_mul(self.d as u32)) >= self.d as u32
+        } else {
+            n - q * self.d >= self.d
+        };
+        if carry {
             q + 1
         } else {
             q
@@ -222,6 +235,19 @@ mod tests {
         assert_eq!(div_round(8, 16), 1);
         assert_eq!(div_round(-8, 16), 0);
         assert_eq!(div_round(-9, 16), -1);
+    }
+
+    #[test]
+    fn mul_high_is_the_high_half() {
+        let mut x = 0x2545_f491_4f6c_dd1du64;
+        for _ in 0..100_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let y = x.rotate_left(29) ^ 0x9e37_79b9_7f4a_7c15;
+            assert_eq!(mul_high(x, y), ((x as u128 * y as u128) >> 64) as u64);
+        }
+        assert_eq!(mul_high(u64::MAX, u64::MAX), u64::MAX - 1);
     }
 
     #[test]
