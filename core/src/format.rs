@@ -508,12 +508,22 @@ mod planes {
         const LEN: usize = C;
         #[inline(always)]
         fn from_fn(mut f: impl FnMut(usize) -> i32) -> Self {
-            // A plain loop LLVM unrolls: `core::array::from_fn` stayed an
-            // out-of-line call on thumbv7em (1.2 M instructions a teapot
-            // frame, measured).
+            // Unrolled by hand for one and three lanes: `core::array::from_fn`
+            // stayed an out-of-line call on thumbv7em (1.2 M instructions a
+            // teapot frame), and at `opt-level = "s"` (the micro:bit) a loop
+            // is not unrolled, so the lanes lived in stack arrays walked
+            // per pixel (measured).
             let mut out = [0; C];
-            for (i, o) in out.iter_mut().enumerate() {
-                *o = f(i);
+            if C == 3 {
+                out[0] = f(0);
+                out[1] = f(1);
+                out[2] = f(2);
+            } else if C == 1 {
+                out[0] = f(0);
+            } else {
+                for (i, o) in out.iter_mut().enumerate() {
+                    *o = f(i);
+                }
             }
             out
         }
