@@ -159,9 +159,11 @@ pub(crate) fn div_round(n: i64, d: i64) -> i64 {
     div_floor(n + d / 2, d)
 }
 
-/// The high 64 bits of `a b`, from four 32x32-bit products: four `umull`s
-/// on the Cortex-M4, four multiply calls on the Cortex-M0 (where a `u128`
-/// product is a general 128-bit multiply, twice the calls; measured).
+/// The high 64 bits of `a b`, from four 32x32-bit products: the same code
+/// as a `u128` product on the Cortex-M4 (four `umull`s; measured equal), and
+/// four 64-bit multiply calls on the Cortex-M0, where `u128` becomes a
+/// general 128-bit multiply (with the 32-bit remainder check below: the M0
+/// demo frame's setup 43.8 M -> 42.8 M instructions, measured).
 #[inline(always)]
 fn mul_high(a: u64, b: u64) -> u64 {
     let (a0, a1) = (a & 0xffff_ffff, a >> 32);

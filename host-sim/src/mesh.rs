@@ -372,6 +372,18 @@ pub fn core_meshes(obj: &crate::obj::Obj, spec: &MeshSpec) -> CoreMeshes {
         groups: Vec<Group>,
         tris: Vec<[u16; 3]>,
     }
+    impl Building {
+        /// An empty group starting at the next triangle and vertex.
+        fn open(&self, material: Material) -> Group {
+            Group {
+                first_triangle: self.tris.len() as u16,
+                triangles: 0,
+                first_vertex: self.pos.len() as u16,
+                vertices: 0,
+                material,
+            }
+        }
+    }
     let flush = |b: &mut Building, out: &mut CoreMeshes| {
         if b.groups.is_empty() {
             return;
@@ -410,13 +422,7 @@ pub fn core_meshes(obj: &crate::obj::Obj, spec: &MeshSpec) -> CoreMeshes {
                 }
                 flush(&mut b, &mut out);
             }
-            let g = group.get_or_insert(Group {
-                first_triangle: b.tris.len() as u16,
-                triangles: 0,
-                first_vertex: b.pos.len() as u16,
-                vertices: 0,
-                material,
-            });
+            let g = group.get_or_insert(b.open(material));
             let here = out.meshes.len();
             let idx = t.map(|i| {
                 let i = i as usize;
@@ -441,13 +447,7 @@ pub fn core_meshes(obj: &crate::obj::Obj, spec: &MeshSpec) -> CoreMeshes {
             for &i in l {
                 let i = i as usize;
                 if map[i].is_none() && b.pos.len() < u16::MAX as usize {
-                    let g = group.get_or_insert(Group {
-                        first_triangle: b.tris.len() as u16,
-                        triangles: 0,
-                        first_vertex: b.pos.len() as u16,
-                        vertices: 0,
-                        material,
-                    });
+                    let g = group.get_or_insert(b.open(material));
                     let v = b.pos.len() as u16;
                     b.pos.push(pos[i].map(q));
                     b.nrm.push([0, 0, 32767]);

@@ -42,13 +42,16 @@ pub static LINE_CMDS: [Command; LINES] = lines(false);
 /// The same lines, two-point (Wu) antialiased.
 pub static WU_LINE_CMDS: [Command; LINES] = lines(true);
 
+/// What the `const` command arrays start as before each slot is written.
+const PLACEHOLDER: Command = Command::WidFill {
+    rect: Rect::new(0, 0, 0, 0),
+    wid: 0,
+};
+
 const fn lines(antialias: bool) -> [Command; LINES] {
     let mut rng = Rng::new(0x6c69_6e65_7377_7521);
     let side = SIDE as i64 * 16;
-    let mut out = [Command::WidFill {
-        rect: Rect::new(0, 0, 0, 0),
-        wid: 0,
-    }; LINES];
+    let mut out = [PLACEHOLDER; LINES];
     let mut i = 0;
     while i < LINES {
         let p = rng.vertex((8, side - 8), (8, side - 8));
@@ -87,10 +90,7 @@ pub fn line_steps(cmds: &[Command]) -> u64 {
 const fn triangles() -> [Command; TRIANGLES] {
     let mut rng = Rng::new(0x7173_7261_7374_6c69);
     let side = SIDE as i64 * 16;
-    let mut out = [Command::WidFill {
-        rect: Rect::new(0, 0, 0, 0),
-        wid: 0,
-    }; TRIANGLES];
+    let mut out = [PLACEHOLDER; TRIANGLES];
     let mut i = 0;
     while i < TRIANGLES {
         let cx = rng.range(0, side);
@@ -112,10 +112,7 @@ const fn corner(x: i32, y: i32, z: u16, rng: &mut Rng) -> Vertex {
 const fn large_triangles() -> [Command; LARGE_TRIANGLES] {
     let mut rng = Rng::new(0x6c61_7267_6574_7269);
     let side = SIDE as i32 * 16;
-    let mut out = [Command::WidFill {
-        rect: Rect::new(0, 0, 0, 0),
-        wid: 0,
-    }; LARGE_TRIANGLES];
+    let mut out = [PLACEHOLDER; LARGE_TRIANGLES];
     let mut i = 0;
     while i < LARGE_TRIANGLES {
         let z = 60000 - 7000 * (i / 2) as u16;
@@ -135,10 +132,7 @@ const fn large_triangles() -> [Command; LARGE_TRIANGLES] {
 }
 
 const fn with_edges() -> [Command; 4 * TRIANGLES] {
-    let mut out = [Command::WidFill {
-        rect: Rect::new(0, 0, 0, 0),
-        wid: 0,
-    }; 4 * TRIANGLES];
+    let mut out = [PLACEHOLDER; 4 * TRIANGLES];
     let mut i = 0;
     while i < TRIANGLES {
         out[i] = TRIANGLE_CMDS_CONST[i];
@@ -160,10 +154,7 @@ const fn with_edges() -> [Command; 4 * TRIANGLES] {
 const TRIANGLE_CMDS_CONST: [Command; TRIANGLES] = triangles();
 
 const fn fills() -> [Command; FILLS] {
-    let mut out = [Command::WidFill {
-        rect: Rect::new(0, 0, 0, 0),
-        wid: 0,
-    }; FILLS];
+    let mut out = [PLACEHOLDER; FILLS];
     let mut i = 0;
     while i < FILLS {
         let k = i as u8;
