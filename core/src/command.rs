@@ -9,13 +9,59 @@ use crate::geom::Rect;
 pub use crate::geom::Vertex;
 use crate::numeric::{ColorFix, ColorStep, ZFix, ZStep, COORD_LIMIT};
 
-/// Per-command state (the seed's window ID and plane mask, and the RUF
-/// seed's object tag).
+/// How a command's fragments combine with the colour plane: replace it
+/// (opaque, the default) or alpha-blend over it (seed 001 §IV.4, the RE's
+/// α-channel): `C = α C_src + (1 - α) C_dst`.
+///
+/// A translucent command takes its opacity from its vertices
+/// ([`Vertex::alpha`], interpolated like a colour channel), its span
+/// ([`SpanCmd::alpha`]) or its fill (`Command::Fill::alpha`). It tests Z but
+/// does not write it unless it is [`Blend::AlphaZWrite`]; drawing
+/// translucent commands back to front is the application's business.
+/// Lines, antialiased edges and Z and window-ID fills ignore the mode.
+///
+/// **Rounding.** The weight is `w = round(256 α / 255)` in 1/256 after
+/// interpolation, so `α = 255` replaces exactly and `α = 0` leaves the
+/// pixel; the blend is `C_dst + (C_src - C_dst) w / 256` in the output
+/// channel scale with 16 fraction bits, then dithered and packed like every
+/// fragment. Error against the exact blend of the same two colours: at most
+/// half an output LSB before the final rounding (`tests/tests/alpha.rs`).
+///
+/// ```
+/// use tilerast::prelude::*;
+/// let v = |x: i32, y: i32| Vertex::new(Coord::from_num(x), Coord::from_num(y), 9, Rgb::new(255, 0, 0)).with_alpha(128);
+/// let glass = Command::triangle([v(0, 0), v(8, 0), v(0, 8)]).blend(Blend::Alpha);
+/// assert_eq!(glass.state().map(|s| s.blend), Some(Blend::Alpha));
+/// assert_eq!(State::default().blend, Blend::Opaque);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u8)]
+pub enum Blend {
+    /// Fragments replace the pixel and write Z (α is ignored).
+    #[default]
+    Opaque = 0,
+    /// Fragments blend over the pixel; Z is tested, not written.
+    Alpha = 1,
+    /// Fragments blend over the pixel; Z is tested and written.
+    AlphaZWrite = 2,
+}
+
+impl Blend {
+    /// Whether fragments blend (every mode but [`Blend::Opaque`]).
+    pub const fn translucent(self) -> bool {
+        !matches!(self, Blend::Opaque)
+    }
+}
+
+/// Per-command state (the seed's window ID and plane mask, the RUF seed's
+/// object tag and the RE's blend mode): 8 bytes.
 ///
 /// ```
 /// use tilerast::command::State;
 /// let s = State { wid: 3, ..State::default() };
 /// assert_eq!(s.plane_mask, u32::MAX);
+/// assert_eq!(core::mem::size_of::<State>(), 8);
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -29,6 +75,8 @@ pub struct State {
     /// Object tag (seed 000): triangles of one object share it, so the RUF
     /// buffer merges their fragments. Used only by coverage antialiasing.
     pub tag: u16,
+    /// Opaque (default) or alpha-blended ([`Blend`]).
+    pub blend: Blend,
 }
 
 impl State {
@@ -38,6 +86,7 @@ impl State {
             wid,
             plane_mask: u32::MAX,
             tag: 0,
+            blend: Blend::Opaque,
         }
     }
 }
@@ -57,7 +106,7 @@ impl Default for State {
 ///     x: 0, y: 0, len: 256,
 ///     color: [ColorFix::ZERO; 3],
 ///     dcolor: [ColorStep::ONE, ColorStep::ZERO, ColorStep::ZERO], // 0..255 ramp
-///     z: ZFix::ZERO, dz: ZStep::ZERO,
+///     z: ZFix::ZERO, dz: ZStep::ZERO, alpha: 255,
 /// };
 /// assert!(s.validate().is_ok());
 /// assert_eq!(SpanCmd { len: 257, ..s }.validate(), Err(Error::SpanOutOfRange));
@@ -78,6 +127,9 @@ pub struct SpanCmd {
     pub z: ZFix,
     /// Depth step per pixel.
     pub dz: ZStep,
+    /// Opacity of every pixel, `0..=255`, when the command blends
+    /// ([`Blend`]); ignored otherwise.
+    pub alpha: u8,
 }
 
 impl SpanCmd {
@@ -149,12 +201,15 @@ pub enum Command {
         /// Window ID and plane mask.
         state: State,
     },
-    /// Area fill with a flat colour: window-ID test and plane mask, no Z, no dither.
+    /// Area fill with a flat colour: window-ID test and plane mask, no Z, no
+    /// dither (a translucent fill blends and dithers like every fragment).
     Fill {
         /// Pixels to fill (clipped to the screen).
         rect: Rect,
         /// The colour.
         color: Rgb,
+        /// Opacity, `0..=255`, when the command blends ([`Blend`]).
+        alpha: u8,
         /// Window ID and plane mask.
         state: State,
     },
@@ -183,7 +238,7 @@ impl Command {
     /// use tilerast::prelude::*;
     /// let v = |x: i32, y: i32| Vertex::new(Coord::from_num(x), Coord::from_num(y), 100, Rgb::new(255, 0, 0));
     /// let t = Command::triangle([v(0, 0), v(8, 0), v(0, 8)]).window(2).plane_mask(0xF800);
-    /// assert_eq!(t.state(), Some(&State { wid: 2, plane_mask: 0xF800, tag: 0 }));
+    /// assert_eq!(t.state(), Some(&State { wid: 2, plane_mask: 0xF800, ..State::default() }));
     /// ```
     pub const fn triangle(v: [Vertex; 3]) -> Command {
         Command::Triangle {
@@ -227,6 +282,7 @@ impl Command {
         Command::Fill {
             rect,
             color,
+            alpha: 255,
             state: State::new(0),
         }
     }
@@ -265,12 +321,21 @@ impl Command {
         self
     }
 
+    /// The same command blended by `mode` ([`Blend`]; no effect on window-ID
+    /// fills).
+    pub const fn blend(mut self, mode: Blend) -> Command {
+        if let Some(state) = self.state_mut() {
+            state.blend = mode;
+        }
+        self
+    }
+
     /// The command's state (window ID, plane mask, object tag); `None` for
     /// [`Command::WidFill`], which has none.
     ///
     /// ```
     /// use tilerast::prelude::*;
-    /// let f = Command::Fill { rect: Rect::new(0, 0, 2, 2), color: Rgb::new(1, 2, 3), state: State::new(4) };
+    /// let f = Command::fill(Rect::new(0, 0, 2, 2), Rgb::new(1, 2, 3)).window(4);
     /// assert_eq!(f.state().map(|s| s.wid), Some(4));
     /// assert_eq!(Command::WidFill { rect: Rect::new(0, 0, 2, 2), wid: 4 }.state(), None);
     /// ```
@@ -349,11 +414,12 @@ mod log {
         fn format(&self, f: defmt::Formatter) {
             defmt::write!(
                 f,
-                "Vertex {{ x: {}/16, y: {}/16, z: {}, color: {} }}",
+                "Vertex {{ x: {}/16, y: {}/16, z: {}, color: {}, alpha: {} }}",
                 self.x.to_bits(),
                 self.y.to_bits(),
                 self.z,
-                self.color
+                self.color,
+                self.alpha
             )
         }
     }
@@ -362,14 +428,15 @@ mod log {
         fn format(&self, f: defmt::Formatter) {
             defmt::write!(
                 f,
-                "SpanCmd {{ x: {}, y: {}, len: {}, color: {}, dcolor: {}, z: {}, dz: {} }} (16.16 bits)",
+                "SpanCmd {{ x: {}, y: {}, len: {}, color: {}, dcolor: {}, z: {}, dz: {}, alpha: {} }} (16.16 bits)",
                 self.x,
                 self.y,
                 self.len,
                 self.color.map(|c| c.to_bits()),
                 self.dcolor.map(|c| c.to_bits()),
                 self.z.to_bits(),
-                self.dz.to_bits()
+                self.dz.to_bits(),
+                self.alpha
             )
         }
     }

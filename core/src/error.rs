@@ -5,7 +5,7 @@
 /// ```
 /// use tilerast::prelude::*;
 /// let mut list: DisplayList<1> = DisplayList::new();
-/// let fill = Command::Fill { rect: Rect::new(0, 0, 4, 4), color: Rgb::new(1, 2, 3), state: State::default() };
+/// let fill = Command::fill(Rect::new(0, 0, 4, 4), Rgb::new(1, 2, 3));
 /// assert!(list.push(fill).is_ok());
 /// assert_eq!(list.push(fill), Err(Error::ListFull));
 /// ```

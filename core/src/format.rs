@@ -334,7 +334,7 @@ impl Half {
 /// tile.begin(Rect::new(0, 0, 4, 4), &Clear::default())?;
 /// let mut back = State::new(0);
 /// back.plane_mask = Half::High.mask();
-/// tile.draw(&Command::Fill { rect: Rect::new(0, 0, 4, 4), color: Rgb::new(255, 0, 0), state: back })?;
+/// tile.draw(&Command::Fill { rect: Rect::new(0, 0, 4, 4), color: Rgb::new(255, 0, 0), state: back, alpha: 255 })?;
 /// let raw = tile.raw(1, 1).unwrap();
 /// assert_eq!(Rgb444PairFormat::half(raw, Half::High), Rgb444::new(15, 0, 0)); // drawn
 /// assert_eq!(Rgb444PairFormat::half(raw, Half::Low), Rgb444::new(0, 0, 0)); // untouched

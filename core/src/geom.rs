@@ -92,7 +92,9 @@ impl From<Rect> for embedded_graphics_core::primitives::Rectangle {
     }
 }
 
-/// A triangle vertex: sub-pixel position, 16-bit depth, 24-bit colour.
+/// A triangle vertex: sub-pixel position, 16-bit depth, 24-bit colour and
+/// an 8-bit opacity (used only by translucent commands, [`crate::command::Blend`];
+/// it lives in the struct's padding, so a vertex stays 16 bytes).
 ///
 /// ```
 /// use tilerast::prelude::*;
@@ -101,7 +103,7 @@ impl From<Rect> for embedded_graphics_core::primitives::Rectangle {
 /// let far = Vertex::new(Coord::from_num(9000), Coord::from_num(0), 0, Rgb::default());
 /// assert_eq!(far.validate(), Err(Error::CoordOutOfRange));
 /// ```
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Vertex {
     /// Column in pixels (4 sub-pixel bits); pixel centres are at `+0.5`.
     pub x: Coord,
@@ -111,12 +113,42 @@ pub struct Vertex {
     pub z: u16,
     /// Colour at the vertex.
     pub color: Rgb,
+    /// Opacity at the vertex, `0` transparent to `255` opaque: interpolated
+    /// like a colour channel (the RE's α-channel) when the command blends,
+    /// ignored otherwise.
+    pub alpha: u8,
+}
+
+impl Default for Vertex {
+    /// The origin, depth 0, black, opaque.
+    fn default() -> Self {
+        Vertex::new(Coord::ZERO, Coord::ZERO, 0, Rgb::new(0, 0, 0))
+    }
 }
 
 impl Vertex {
-    /// A vertex from fixed-point coordinates.
+    /// An opaque vertex from fixed-point coordinates.
     pub const fn new(x: Coord, y: Coord, z: u16, color: Rgb) -> Self {
-        Vertex { x, y, z, color }
+        Vertex {
+            x,
+            y,
+            z,
+            color,
+            alpha: 255,
+        }
+    }
+
+    /// The same vertex with opacity `alpha` (`0..=255`).
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// let v = Vertex::new(Coord::from_num(1), Coord::from_num(2), 3, Rgb::new(4, 5, 6)).with_alpha(128);
+    /// assert_eq!((v.alpha, Vertex::default().alpha), (128, 255));
+    /// assert_eq!(core::mem::size_of::<Vertex>(), 16);
+    /// ```
+    pub const fn with_alpha(mut self, alpha: u8) -> Self {
+        self.alpha = alpha;
+        self
     }
 
     /// A vertex at an `embedded-graphics` point (whole pixels: the corner

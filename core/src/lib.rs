@@ -108,7 +108,7 @@ pub use fixed;
 /// Everything a firmware author needs, in one import.
 pub mod prelude {
     pub use crate::bin::Bins;
-    pub use crate::command::{Command, SpanCmd, State, Vertex};
+    pub use crate::command::{Blend, Command, SpanCmd, State, Vertex};
     pub use crate::config::{groups, Planes, Ssd1306Config, St7789Config, TileConfig};
     pub use crate::error::{Error, FlushError};
     pub use crate::format::{

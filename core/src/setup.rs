@@ -173,11 +173,29 @@ pub(crate) struct TriangleSetup<L: Lanes, T> {
     pub gcy: L,
     /// Z step per row (small triangles only).
     pub gzy: i32,
+    /// Blend-weight plane of a translucent triangle (zero for an opaque
+    /// one): value at the anchor, steps in x and y, as for `c`. The weight is
+    /// `256 α / 255` in 1/256 with 16 fraction bits ([`alpha_weight`]).
+    pub alpha: [i32; 3],
     inv: i64,
     c0: L,
     dc: [L; 2],
     z0: i32,
     dz: [i32; 2],
+    a0: i32,
+    da: [i32; 2],
+}
+
+/// A vertex's opacity as a blend weight in 1/256 with 16 fraction bits:
+/// `round(256 α / 255 · 2^16) = 65793 α + round(α / 255)`, so `α = 255`
+/// weighs exactly `2^24` (replace) and `α = 0` nothing. No division.
+///
+/// ```ignore
+/// assert_eq!(alpha_weight(255), 1 << 24);
+/// ```
+#[inline(always)]
+pub(crate) const fn alpha_weight(alpha: u8) -> i32 {
+    alpha as i32 * 65793 + (alpha >> 7) as i32
 }
 
 fn sub(v: &Vertex) -> (i64, i64) {
@@ -226,7 +244,10 @@ impl<L: Lanes, T: EdgeInt> TriangleSetup<L, T> {
     /// Cortex-M4 (measured). Inlining cannot change a result.
     #[cfg_attr(target_abi = "eabi", inline(never))]
     #[cfg_attr(not(target_abi = "eabi"), inline(always))]
-    pub fn new<F: PixelFormat<Lanes = L>>(v: &[Vertex; 3]) -> Option<Self> {
+    ///
+    /// With `alpha` (a translucent command) it also sets up the blend-weight
+    /// plane from the vertices' opacities, like one more colour channel.
+    pub fn new<F: PixelFormat<Lanes = L>>(v: &[Vertex; 3], alpha: bool) -> Option<Self> {
         let bounds = pixel_bounds(v)?;
         let (p0, mut p1, mut p2) = (sub(&v[0]), sub(&v[1]), sub(&v[2]));
         let area = |p0: (i64, i64), p1: (i64, i64), p2: (i64, i64)| {
@@ -305,6 +326,14 @@ impl<L: Lanes, T: EdgeInt> TriangleSetup<L, T> {
             *p = plane(c0.lane(i), dc[0].lane(i), dc[1].lane(i));
         }
         let (z, gz, gzy) = plane(z0, dz[0], dz[1]);
+        let (a0, da, alpha) = if alpha {
+            let a0 = alpha_weight(v[0].alpha);
+            let da = [alpha_weight(v1.alpha) - a0, alpha_weight(v2.alpha) - a0];
+            let (a, ga, gay) = plane(a0, da[0], da[1]);
+            (a0, da, [a, ga, gay])
+        } else {
+            (0, [0; 2], [0; 3])
+        };
         let t = TriangleSetup {
             e,
             bounds,
@@ -323,6 +352,9 @@ impl<L: Lanes, T: EdgeInt> TriangleSetup<L, T> {
             dc,
             z0,
             dz,
+            a0,
+            da,
+            alpha,
         };
         Some(t)
     }
@@ -331,13 +363,40 @@ impl<L: Lanes, T: EdgeInt> TriangleSetup<L, T> {
     /// values `e1`, `e2` there (`0 <= e_i <= area2`). Error below 2^-11 LSB.
     #[inline]
     pub fn start(&self, e1: i64, e2: i64) -> (L, i32) {
-        let w1 = (e1 * self.inv) >> (62 - W_FRAC);
-        let w2 = (e2 * self.inv) >> (62 - W_FRAC);
-        let half = 1i64 << (W_FRAC - 1);
-        let lerp = |a0: i32, d1: i32, d2: i32| {
-            a0 + ((d1 as i64 * w1 + d2 as i64 * w2 + half) >> W_FRAC) as i32
-        };
-        let c = L::from_fn(|i| lerp(self.c0.lane(i), self.dc[0].lane(i), self.dc[1].lane(i)));
-        (c, lerp(self.z0, self.dz[0], self.dz[1]))
+        let (w1, w2) = self.weights(e1, e2);
+        let c = L::from_fn(|i| {
+            lerp(
+                self.c0.lane(i),
+                self.dc[0].lane(i),
+                self.dc[1].lane(i),
+                w1,
+                w2,
+            )
+        });
+        (c, lerp(self.z0, self.dz[0], self.dz[1], w1, w2))
     }
+
+    /// The blend weight at the same pixel as [`Self::start`], same error.
+    #[inline]
+    pub fn alpha_start(&self, e1: i64, e2: i64) -> i32 {
+        let (w1, w2) = self.weights(e1, e2);
+        lerp(self.a0, self.da[0], self.da[1], w1, w2)
+    }
+
+    /// Barycentric weights `w1, w2` with [`W_FRAC`] fraction bits.
+    #[inline(always)]
+    fn weights(&self, e1: i64, e2: i64) -> (i64, i64) {
+        (
+            (e1 * self.inv) >> (62 - W_FRAC),
+            (e2 * self.inv) >> (62 - W_FRAC),
+        )
+    }
+}
+
+/// `a0 + d1 w1 + d2 w2`, the weights with [`W_FRAC`] fraction bits,
+/// rounded to nearest.
+#[inline(always)]
+fn lerp(a0: i32, d1: i32, d2: i32, w1: i64, w2: i64) -> i32 {
+    let half = 1i64 << (W_FRAC - 1);
+    a0 + ((d1 as i64 * w1 + d2 as i64 * w2 + half) >> W_FRAC) as i32
 }

@@ -3,9 +3,12 @@
 //! tile without ever being copied to RAM. This layer only encodes and
 //! decodes; drawing is [`crate::tile`]'s business.
 //!
-//! Each command starts with a tag byte: the low 6 bits name the command, bit
+//! Each command starts with a tag byte: the low 5 bits name the command, bit
 //! 7 says a 4-byte plane mask follows the window ID, bit 6 that a 2-byte
-//! object tag follows (after the mask).
+//! object tag follows (after the mask), bit 5 that the command carries
+//! opacity: a blend-mode byte follows (after the tag; 0 opaque, 1 alpha,
+//! 2 alpha with Z write) and every vertex, span and fill body ends with an
+//! `alpha: u8` (so opaque commands pay no byte for it).
 //!
 //! | tag | command | body after `wid` \[`mask`\] |
 //! | --- | --- | --- |
@@ -26,7 +29,7 @@
 //!
 //! Decoding validates every command ([`Command::validate`]).
 
-use crate::command::{Command, SpanCmd, State, Vertex};
+use crate::command::{Blend, Command, SpanCmd, State, Vertex};
 use crate::error::Error;
 use crate::format::Rgb;
 use crate::geom::Rect;
@@ -35,6 +38,8 @@ use crate::raster::line::{EdgeCmd, LineCmd, LineStyle, Side};
 
 const MASK_FLAG: u8 = 0x80;
 const TAG_FLAG: u8 = 0x40;
+const ALPHA_FLAG: u8 = 0x20;
+const FLAGS: u8 = MASK_FLAG | TAG_FLAG | ALPHA_FLAG;
 
 /// Largest encoded command, in bytes.
 pub const MAX_ENCODED: usize = 64;
@@ -43,14 +48,21 @@ pub const MAX_ENCODED: usize = 64;
 struct Writer<'a> {
     buf: &'a mut [u8],
     pos: usize,
+    /// Whether the command carries opacity (bodies end with `alpha`).
+    alpha: bool,
 }
 
 impl Writer<'_> {
-    /// A command's tag byte and state; the plane mask only when partial.
-    fn head(&mut self, tag: u8, st: &State) -> Result<(), Error> {
+    /// A command's tag byte and state; the plane mask only when partial,
+    /// the blend mode only when `alpha` (the command blends or carries a
+    /// non-opaque α, which then follows each vertex, span or fill body).
+    fn head(&mut self, tag: u8, st: &State, alpha: bool) -> Result<(), Error> {
         let masked = st.plane_mask != u32::MAX;
         let tagged = st.tag != 0;
-        let flags = if masked { MASK_FLAG } else { 0 } | if tagged { TAG_FLAG } else { 0 };
+        self.alpha = alpha || st.blend != Blend::Opaque;
+        let flags = if masked { MASK_FLAG } else { 0 }
+            | if tagged { TAG_FLAG } else { 0 }
+            | if self.alpha { ALPHA_FLAG } else { 0 };
         self.put(&[tag | flags, st.wid])?;
         if masked {
             self.put(&st.plane_mask.to_le_bytes())?;
@@ -58,10 +70,22 @@ impl Writer<'_> {
         if tagged {
             self.put(&st.tag.to_le_bytes())?;
         }
+        if self.alpha {
+            self.put(&[st.blend as u8])?;
+        }
         Ok(())
     }
 
-    /// A vertex: `x, y` as `i16` (`small`) or `i32` sub-pixels, `z`, colour.
+    /// The `alpha` byte closing a body, when the command carries opacity.
+    fn alpha(&mut self, a: u8) -> Result<(), Error> {
+        if self.alpha {
+            self.put(&[a])?;
+        }
+        Ok(())
+    }
+
+    /// A vertex: `x, y` as `i16` (`small`) or `i32` sub-pixels, `z`, colour
+    /// \[, α\].
     fn vertex(&mut self, v: &Vertex, small: bool) -> Result<(), Error> {
         if small {
             self.put(&(v.x.to_bits() as i16).to_le_bytes())?;
@@ -71,7 +95,8 @@ impl Writer<'_> {
             self.put(&v.y.to_bits().to_le_bytes())?;
         }
         self.put(&v.z.to_le_bytes())?;
-        self.put(&[v.color.r, v.color.g, v.color.b])
+        self.put(&[v.color.r, v.color.g, v.color.b])?;
+        self.alpha(v.alpha)
     }
 
     fn put(&mut self, bytes: &[u8]) -> Result<(), Error> {
@@ -89,6 +114,8 @@ impl Writer<'_> {
 struct Reader<'a> {
     buf: &'a [u8],
     pos: usize,
+    /// Whether the command carries opacity (bodies end with `alpha`).
+    alpha: bool,
 }
 
 impl Reader<'_> {
@@ -130,11 +157,21 @@ impl Reader<'_> {
             Coord::from_bits(y),
             self.u16()?,
             self.rgb()?,
-        ))
+        )
+        .with_alpha(self.alpha()?))
     }
     fn rgb(&mut self) -> Result<Rgb, Error> {
         let [r, g, b] = self.take()?;
         Ok(Rgb::new(r, g, b))
+    }
+    /// The `alpha` byte closing a body (255 when the command carries none).
+    #[inline(always)]
+    fn alpha(&mut self) -> Result<u8, Error> {
+        if self.alpha {
+            self.u8()
+        } else {
+            Ok(255)
+        }
     }
     /// A command's tag byte and state (window ID, optional plane mask).
     fn head(&mut self) -> Result<(u8, State), Error> {
@@ -146,12 +183,24 @@ impl Reader<'_> {
             u32::MAX
         };
         let obj = if tag & TAG_FLAG != 0 { self.u16()? } else { 0 };
+        self.alpha = tag & ALPHA_FLAG != 0;
+        let blend = if self.alpha {
+            match self.u8()? {
+                0 => Blend::Opaque,
+                1 => Blend::Alpha,
+                2 => Blend::AlphaZWrite,
+                _ => return Err(Error::Malformed),
+            }
+        } else {
+            Blend::Opaque
+        };
         Ok((
             tag,
             State {
                 wid,
                 plane_mask,
                 tag: obj,
+                blend,
             },
         ))
     }
@@ -189,25 +238,31 @@ fn small(v: &Vertex) -> bool {
 /// # Ok::<(), Error>(())
 /// ```
 pub fn encode(cmd: &Command, buf: &mut [u8]) -> Result<usize, Error> {
-    let mut w = Writer { buf, pos: 0 };
+    let mut w = Writer {
+        buf,
+        pos: 0,
+        alpha: false,
+    };
     match cmd {
         Command::Triangle { v, state } => {
             let small = v.iter().all(small);
-            w.head(if small { 2 } else { 1 }, state)?;
+            let alpha = v.iter().any(|v| v.alpha != 255);
+            w.head(if small { 2 } else { 1 }, state, alpha)?;
             for v in v {
                 w.vertex(v, small)?;
             }
         }
         Command::Edge { edge, state } => {
             let small = edge.v.iter().all(small);
-            w.head(if small { 10 } else { 9 }, state)?;
+            let alpha = edge.v.iter().any(|v| v.alpha != 255);
+            w.head(if small { 10 } else { 9 }, state, alpha)?;
             for v in &edge.v {
                 w.vertex(v, small)?;
             }
             w.put(&[(edge.interior == Side::Right) as u8])?;
         }
         Command::Span { span: s, state } => {
-            w.head(3, state)?;
+            w.head(3, state, s.alpha != 255)?;
             w.put(&s.x.to_le_bytes())?;
             w.put(&s.y.to_le_bytes())?;
             w.put(&s.len.to_le_bytes())?;
@@ -219,9 +274,10 @@ pub fn encode(cmd: &Command, buf: &mut [u8]) -> Result<usize, Error> {
             }
             w.put(&s.z.to_bits().to_le_bytes())?;
             w.put(&s.dz.to_bits().to_le_bytes())?;
+            w.alpha(s.alpha)?;
         }
         Command::Line { line: l, state } => {
-            w.head(8, state)?;
+            w.head(8, state, false)?;
             for c in [l.p0.0, l.p0.1, l.p1.0, l.p1.1] {
                 w.put(&c.to_bits().to_le_bytes())?;
             }
@@ -233,13 +289,19 @@ pub fn encode(cmd: &Command, buf: &mut [u8]) -> Result<usize, Error> {
             w.put(&l.style.phase.to_le_bytes())?;
             w.put(&[l.antialias as u8])?;
         }
-        Command::Fill { rect, color, state } => {
-            w.head(4, state)?;
+        Command::Fill {
+            rect,
+            color,
+            alpha,
+            state,
+        } => {
+            w.head(4, state, *alpha != 255)?;
             rect_bytes(&mut w, rect)?;
             w.put(&[color.r, color.g, color.b])?;
+            w.alpha(*alpha)?;
         }
         Command::ZFill { rect, z, state } => {
-            w.head(5, state)?;
+            w.head(5, state, false)?;
             rect_bytes(&mut w, rect)?;
             w.put(&z.to_le_bytes())?;
         }
@@ -255,9 +317,13 @@ pub fn encode(cmd: &Command, buf: &mut [u8]) -> Result<usize, Error> {
 /// and the bytes it used. Truncated or unknown input is
 /// [`Error::Malformed`].
 pub fn decode(buf: &[u8]) -> Result<(Command, usize), Error> {
-    let mut r = Reader { buf, pos: 0 };
+    let mut r = Reader {
+        buf,
+        pos: 0,
+        alpha: false,
+    };
     let (tag, state) = r.head()?;
-    let cmd = match tag & !(MASK_FLAG | TAG_FLAG) {
+    let cmd = match tag & !FLAGS {
         t @ (1 | 2) => {
             let v = [r.vertex(t == 2)?, r.vertex(t == 2)?, r.vertex(t == 2)?];
             Command::Triangle { v, state }
@@ -288,6 +354,7 @@ pub fn decode(buf: &[u8]) -> Result<(Command, usize), Error> {
                     dcolor,
                     z,
                     dz,
+                    alpha: r.alpha()?,
                 },
                 state,
             }
@@ -322,6 +389,7 @@ pub fn decode(buf: &[u8]) -> Result<(Command, usize), Error> {
         4 => Command::Fill {
             rect: r.rect()?,
             color: r.rgb()?,
+            alpha: r.alpha()?,
             state,
         },
         5 => Command::ZFill {
@@ -329,7 +397,7 @@ pub fn decode(buf: &[u8]) -> Result<(Command, usize), Error> {
             z: r.u16()?,
             state,
         },
-        6 if tag & (MASK_FLAG | TAG_FLAG) == 0 => Command::WidFill {
+        6 if tag & FLAGS == 0 => Command::WidFill {
             rect: r.rect()?,
             wid: state.wid,
         },
@@ -339,7 +407,8 @@ pub fn decode(buf: &[u8]) -> Result<(Command, usize), Error> {
     Ok((cmd, r.pos))
 }
 
-/// Size of an encoded mesh vertex.
+/// Size of an encoded mesh vertex (one more, its α, in a mesh record that
+/// carries opacity).
 const MESH_VERTEX: usize = 9;
 
 /// Encodes triangles sharing `state` as one indexed-mesh record:
@@ -365,8 +434,12 @@ pub fn encode_mesh(
 ) -> Result<usize, Error> {
     let nv = u16::try_from(vertices.len()).map_err(|_| Error::BufferTooSmall)?;
     let nt = u16::try_from(tris.len()).map_err(|_| Error::BufferTooSmall)?;
-    let mut w = Writer { buf, pos: 0 };
-    w.head(7, state)?;
+    let mut w = Writer {
+        buf,
+        pos: 0,
+        alpha: false,
+    };
+    w.head(7, state, vertices.iter().any(|v| v.alpha != 255))?;
     w.put(&nv.to_le_bytes())?;
     w.put(&nt.to_le_bytes())?;
     for v in vertices {
@@ -392,6 +465,8 @@ struct MeshCursor<'a> {
     vertices: &'a [u8],
     indices: &'a [u8],
     state: State,
+    /// Whether each vertex carries its α (a tenth byte).
+    alpha: bool,
 }
 
 impl MeshCursor<'_> {
@@ -400,7 +475,7 @@ impl MeshCursor<'_> {
     /// twice, binning and drawing).
     #[inline(always)]
     fn vertex(&self, i: u16) -> Result<Vertex, Error> {
-        let at = i as usize * MESH_VERTEX;
+        let at = i as usize * (MESH_VERTEX + self.alpha as usize);
         let c: &[u8; MESH_VERTEX] = self
             .vertices
             .get(at..at + MESH_VERTEX)
@@ -411,7 +486,15 @@ impl MeshCursor<'_> {
             Coord::from_bits(i16::from_le_bytes([c[2], c[3]]) as i32),
             u16::from_le_bytes([c[4], c[5]]),
             Rgb::new(c[6], c[7], c[8]),
-        ))
+        )
+        .with_alpha(if self.alpha {
+            *self
+                .vertices
+                .get(at + MESH_VERTEX)
+                .ok_or(Error::Malformed)?
+        } else {
+            255
+        }))
     }
 
     /// The triangle whose indices start `at` bytes into the index list.
@@ -437,11 +520,15 @@ impl MeshCursor<'_> {
 /// Reads a mesh record's header; returns the cursor and the record length
 /// (the index list is its last `6 nt` bytes).
 fn mesh_record(buf: &[u8]) -> Result<(MeshCursor<'_>, usize), Error> {
-    let mut r = Reader { buf, pos: 0 };
+    let mut r = Reader {
+        buf,
+        pos: 0,
+        alpha: false,
+    };
     let (_, state) = r.head()?;
     let (nv, nt) = (r.u16()? as usize, r.u16()? as usize);
     let vs = r.pos;
-    let is = vs + nv * MESH_VERTEX;
+    let is = vs + nv * (MESH_VERTEX + r.alpha as usize);
     let end = is + nt * 6;
     if end > buf.len() {
         return Err(Error::Malformed);
@@ -450,6 +537,7 @@ fn mesh_record(buf: &[u8]) -> Result<(MeshCursor<'_>, usize), Error> {
         vertices: &buf[vs..is],
         indices: &buf[is..end],
         state,
+        alpha: r.alpha,
     };
     Ok((cursor, end))
 }
@@ -470,7 +558,7 @@ pub struct Encoded<'a>(pub &'a [u8]);
 
 /// Whether a tag byte starts an indexed-mesh record.
 fn is_mesh(tag: u8) -> bool {
-    tag & !(MASK_FLAG | TAG_FLAG) == 7
+    tag & !FLAGS == 7
 }
 
 impl<'a> Encoded<'a> {
@@ -616,7 +704,11 @@ impl SceneHeader {
 
     /// Writes the [`HEADER_LEN`] header bytes.
     pub fn encode(&self, buf: &mut [u8]) -> Result<(), Error> {
-        let mut w = Writer { buf, pos: 0 };
+        let mut w = Writer {
+            buf,
+            pos: 0,
+            alpha: false,
+        };
         w.put(&MAGIC)?;
         for v in [self.width, self.height, self.tile.0, self.tile.1] {
             w.put(&v.to_le_bytes())?;
@@ -631,7 +723,11 @@ impl SceneHeader {
 
     /// Splits an encoded scene into its header and its commands.
     pub fn parse(bytes: &[u8]) -> Result<(SceneHeader, Encoded<'_>), Error> {
-        let mut r = Reader { buf: bytes, pos: 0 };
+        let mut r = Reader {
+            buf: bytes,
+            pos: 0,
+            alpha: false,
+        };
         if r.take::<4>()? != MAGIC {
             return Err(Error::Malformed);
         }

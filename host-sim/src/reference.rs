@@ -73,10 +73,15 @@ pub fn render(cfg: &Config, cmds: &[Command]) -> RefFrame {
                     for_rect(rect, &screen, |x, y| f.wid[(y * w + x) as usize] = *wid);
                 }
             }
-            Command::Fill { rect, color, state } => for_rect(rect, &screen, |x, y| {
+            Command::Fill {
+                rect,
+                color,
+                alpha,
+                state,
+            } => for_rect(rect, &screen, |x, y| {
                 let i = (y * w + x) as usize;
                 if !cfg.wid || f.wid[i] == state.wid {
-                    f.color[i] = rgb(*color);
+                    f.color[i] = over(state, *alpha as f64 / 255.0, rgb(*color), f.color[i]);
                 }
             }),
             Command::ZFill { rect, z, state } => for_rect(rect, &screen, |x, y| {
@@ -100,13 +105,13 @@ pub fn render(cfg: &Config, cmds: &[Command]) -> RefFrame {
                         &mut f,
                         cfg,
                         (y as u32 * w + x as u32) as usize,
-                        c,
+                        (c, span.alpha as f64 / 255.0),
                         z,
-                        state.wid,
+                        state,
                     );
                 }
             }
-            Command::Triangle { v, state } => triangle(&mut f, cfg, v, state.wid),
+            Command::Triangle { v, state } => triangle(&mut f, cfg, v, state),
             Command::Line { line, state } => line_ref(&mut f, cfg, line, state.wid),
             Command::Edge { edge, state } => edge_ref(&mut f, cfg, edge, state.wid),
             other => unimplemented!("the reference does not model {other:?} yet"),
@@ -131,8 +136,11 @@ fn for_rect(r: &Rect, screen: &Rect, mut f: impl FnMut(u32, u32)) {
     }
 }
 
-fn fragment(f: &mut RefFrame, cfg: &Config, i: usize, c: [f64; 3], z: f64, wid: u8) {
-    if cfg.wid && f.wid[i] != wid {
+/// A fragment of colour `c` and opacity `a` (0..=1, used when the state
+/// blends) after the window-ID and Z tests; Z is written unless the state
+/// blends without Z write.
+fn fragment(f: &mut RefFrame, cfg: &Config, i: usize, (c, a): ([f64; 3], f64), z: f64, st: &State) {
+    if cfg.wid && f.wid[i] != st.wid {
         return;
     }
     if cfg.depth {
@@ -140,9 +148,20 @@ fn fragment(f: &mut RefFrame, cfg: &Config, i: usize, c: [f64; 3], z: f64, wid: 
         if z >= f.depth[i] {
             return;
         }
-        f.depth[i] = z;
+        if st.blend != Blend::Alpha {
+            f.depth[i] = z;
+        }
     }
-    f.color[i] = c;
+    f.color[i] = over(st, a, c, f.color[i]);
+}
+
+/// `a c + (1 - a) dst` when the state blends, `c` otherwise.
+fn over(st: &State, a: f64, c: [f64; 3], dst: [f64; 3]) -> [f64; 3] {
+    if st.blend.translucent() {
+        std::array::from_fn(|k| a * c[k] + (1.0 - a) * dst[k])
+    } else {
+        c
+    }
 }
 
 /// Lines the obvious way: for each pixel centre along the major axis from
@@ -188,7 +207,7 @@ fn line_ref(f: &mut RefFrame, cfg: &Config, l: &LineCmd, wid: u8) {
         let (x, y) = if y_major { (minor, c) } else { (c, minor) };
         if l.style.on(k) && x >= 0 && y >= 0 && x < f.width as i64 && y < f.height as i64 {
             let i = (y as u32 * f.width + x as u32) as usize;
-            fragment(f, cfg, i, rgb(l.color), z, wid);
+            fragment(f, cfg, i, (rgb(l.color), 1.0), z, &State::new(wid));
         }
         c += dir;
         k += 1;
@@ -321,7 +340,7 @@ fn edge_ref(f: &mut RefFrame, cfg: &Config, e: &EdgeCmd, wid: u8) {
     }
 }
 
-fn triangle(f: &mut RefFrame, cfg: &Config, v: &[Vertex; 3], wid: u8) {
+fn triangle(f: &mut RefFrame, cfg: &Config, v: &[Vertex; 3], st: &State) {
     // Sub-pixel units (1/16 px): exact integers, exact in f64 too.
     let p: Vec<(i64, i64)> = v
         .iter()
@@ -369,13 +388,14 @@ fn triangle(f: &mut RefFrame, cfg: &Config, v: &[Vertex; 3], wid: u8) {
             let c: [f64; 3] =
                 std::array::from_fn(|ch| (0..3).map(|i| w[i] * rgb(vv[i].color)[ch]).sum());
             let z: f64 = (0..3).map(|i| w[i] * vv[i].z as f64).sum();
+            let a: f64 = (0..3).map(|i| w[i] * vv[i].alpha as f64 / 255.0).sum();
             fragment(
                 f,
                 cfg,
                 (py as u32 * f.width + px as u32) as usize,
-                c,
+                (c, a),
                 z,
-                wid,
+                st,
             );
         }
     }
@@ -547,9 +567,14 @@ impl Samples {
                     self.pixels(rect, |s, i, _, _| s.wid[i] = *wid);
                 }
             }
-            Command::Fill { rect, color, state } => self.pixels(rect, |s, i, _, _| {
+            Command::Fill {
+                rect,
+                color,
+                alpha,
+                state,
+            } => self.pixels(rect, |s, i, _, _| {
                 if !cfg.wid || s.wid[i] == state.wid {
-                    s.color[i] = rgb(*color);
+                    s.color[i] = over(state, *alpha as f64 / 255.0, rgb(*color), s.color[i]);
                 }
             }),
             Command::ZFill { rect, z, state } => self.pixels(rect, |s, i, _, _| {
@@ -565,19 +590,19 @@ impl Samples {
                         span.color[ch].to_num::<f64>() + span.dcolor[ch].to_num::<f64>() * k
                     });
                     let z = span.z.to_num::<f64>() + span.dz.to_num::<f64>() * k;
-                    if s.pass(cfg, i, z, state.wid, true) {
-                        s.color[i] = c;
+                    if s.pass(cfg, i, z, state.wid, state.blend != Blend::Alpha) {
+                        s.color[i] = over(state, span.alpha as f64 / 255.0, c, s.color[i]);
                     }
                 });
             }
-            Command::Triangle { v, state } => self.triangle(cfg, v, state.wid),
+            Command::Triangle { v, state } => self.triangle(cfg, v, state),
             Command::Line { line, state } => self.line(cfg, line, state.wid),
             Command::Edge { .. } => {}
             other => unimplemented!("the ideal does not model {other:?} yet"),
         }
     }
 
-    fn triangle(&mut self, cfg: &Config, v: &[Vertex; 3], wid: u8) {
+    fn triangle(&mut self, cfg: &Config, v: &[Vertex; 3], st: &State) {
         let p = v.map(|v| (v.x.to_num::<f64>(), v.y.to_num::<f64>()));
         let cross = |a: (f64, f64), b: (f64, f64), c: (f64, f64)| {
             (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0)
@@ -608,9 +633,11 @@ impl Samples {
             }
             let wt = e.map(|e| e / area);
             let z: f64 = (0..3).map(|k| wt[k] * vv[k].z as f64).sum();
-            if s.pass(cfg, i, z, wid, true) {
-                s.color[i] =
+            if s.pass(cfg, i, z, st.wid, st.blend != Blend::Alpha) {
+                let c =
                     std::array::from_fn(|ch| (0..3).map(|k| wt[k] * rgb(vv[k].color)[ch]).sum());
+                let a: f64 = (0..3).map(|k| wt[k] * vv[k].alpha as f64 / 255.0).sum();
+                s.color[i] = over(st, a, c, s.color[i]);
             }
         });
     }

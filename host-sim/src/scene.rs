@@ -24,6 +24,9 @@
 //! window = 1
 //! v = [[10, 10, 100, 255, 0, 0], [100, 20, 100, 0, 255, 0], [50, 90, 100, 0, 0, 255]]
 //! edge_aa = true             # optional: antialias its edges (seed 003 eq. 8)
+//! alpha = [255, 128, 0]      # optional: opacity, one for all vertices or one each
+//! blend = "alpha"            # optional: opaque | alpha | alpha_zwrite (default:
+//!                            # alpha when an alpha is given; see below)
 //!
 //! [[command]]
 //! kind = "span"              # the raster engine's span: start values and per-pixel steps
@@ -40,6 +43,7 @@
 //! rect = [0, 0, 10, 10]
 //! rgb = [255, 255, 255]
 //! plane_mask = 0xF800        # optional, in the packed format's bits
+//! alpha = 96                 # optional: a translucent fill (spans take it too)
 //!
 //! [[command]]
 //! kind = "zfill"
@@ -68,6 +72,10 @@
 //! rotate_y = 30
 //! edge_aa = true             # optional: antialias its silhouette and open boundary
 //! ```
+//!
+//! Translucent commands (seed 001 §IV.4) blend `C = α C + (1 - α) C_dst`
+//! over what is drawn before them, so list them back to front after the
+//! opaque ones; they test Z and write it only with `blend = "alpha_zwrite"`.
 //!
 //! Antialiased edges are drawn after every other command, over the finished
 //! solids; `tilerast-sim render --edge-aa on|off` switches them for the
@@ -139,6 +147,8 @@ enum CommandSpec {
         #[serde(default)]
         window: u8,
         plane_mask: Option<u32>,
+        alpha: Option<AlphaSpec>,
+        blend: Option<BlendKind>,
     },
     Span {
         x: i32,
@@ -154,6 +164,8 @@ enum CommandSpec {
         #[serde(default)]
         window: u8,
         plane_mask: Option<u32>,
+        alpha: Option<u8>,
+        blend: Option<BlendKind>,
     },
     Fill {
         rect: [i32; 4],
@@ -161,6 +173,8 @@ enum CommandSpec {
         #[serde(default)]
         window: u8,
         plane_mask: Option<u32>,
+        alpha: Option<u8>,
+        blend: Option<BlendKind>,
     },
     Zfill {
         rect: [i32; 4],
@@ -196,6 +210,43 @@ enum CommandSpec {
         plane_mask: Option<u32>,
     },
     Mesh(MeshSpec),
+}
+
+/// A triangle's opacity: one for all vertices or one each.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(untagged)]
+enum AlphaSpec {
+    All(u8),
+    Each([u8; 3]),
+}
+
+impl AlphaSpec {
+    fn each(self) -> [u8; 3] {
+        match self {
+            AlphaSpec::All(a) => [a; 3],
+            AlphaSpec::Each(a) => a,
+        }
+    }
+}
+
+/// How a command blends (`blend = "opaque" | "alpha" | "alpha_zwrite"`).
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub(crate) enum BlendKind {
+    Opaque,
+    Alpha,
+    AlphaZwrite,
+}
+
+/// The blend mode: as named, else alpha blending when an `alpha` is given.
+fn blend_of(kind: Option<BlendKind>, has_alpha: bool) -> Blend {
+    match kind {
+        Some(BlendKind::Opaque) => Blend::Opaque,
+        Some(BlendKind::Alpha) => Blend::Alpha,
+        Some(BlendKind::AlphaZwrite) => Blend::AlphaZWrite,
+        None if has_alpha => Blend::Alpha,
+        None => Blend::Opaque,
+    }
 }
 
 #[derive(Debug, Deserialize)]
@@ -333,7 +384,7 @@ fn state(window: u8, mask: Option<u32>) -> State {
     State {
         wid: window,
         plane_mask: mask.unwrap_or(u32::MAX),
-        tag: 0,
+        ..State::default()
     }
 }
 
@@ -465,11 +516,7 @@ impl Scene {
             let r = rect(w.rect).map_err(|e| invalid(line, e))?;
             commands.push(Command::WidFill { rect: r, wid: w.id });
             if let Some([r0, g0, b0]) = w.background {
-                commands.push(Command::Fill {
-                    rect: r,
-                    color: Rgb::new(r0, g0, b0),
-                    state: state(w.id, None),
-                });
+                commands.push(Command::fill(r, Rgb::new(r0, g0, b0)).window(w.id));
             }
         }
         for c in &file.command {
@@ -485,6 +532,8 @@ impl Scene {
                     edge_aa,
                     window,
                     plane_mask,
+                    alpha,
+                    blend,
                 } => {
                     let mut vs = [Vertex::default(); 3];
                     for (k, p) in v.iter().enumerate() {
@@ -516,9 +565,13 @@ impl Scene {
                         )
                         .map_err(|e| at(format!("vertex {k}: {e}")))?;
                     }
+                    for (v, a) in vs.iter_mut().zip(alpha.map_or([255; 3], AlphaSpec::each)) {
+                        v.alpha = a;
+                    }
                     // Each triangle of the file is an object of its own.
                     let st = State {
                         tag: next_tag(&mut tags),
+                        blend: blend_of(*blend, alpha.is_some()),
                         ..state(*window, *plane_mask)
                     };
                     for i in 0..3 {
@@ -537,6 +590,8 @@ impl Scene {
                     dz,
                     window,
                     plane_mask,
+                    alpha,
+                    blend,
                 } => {
                     let span = SpanCmd {
                         x: *x,
@@ -546,11 +601,15 @@ impl Scene {
                         dcolor: fixes::<ColorStep>(drgb, "drgb").map_err(key("drgb"))?,
                         z: fix::<ZFix>(*z, "z").map_err(key("z"))?,
                         dz: fix::<ZStep>(*dz, "dz").map_err(key("dz"))?,
+                        alpha: alpha.unwrap_or(255),
                     };
                     span.validate().map_err(|e| key("len")(e.to_string()))?;
                     Command::Span {
                         span,
-                        state: state(*window, *plane_mask),
+                        state: State {
+                            blend: blend_of(*blend, alpha.is_some()),
+                            ..state(*window, *plane_mask)
+                        },
                     }
                 }
                 CommandSpec::Fill {
@@ -558,10 +617,16 @@ impl Scene {
                     rgb,
                     window,
                     plane_mask,
+                    alpha,
+                    blend,
                 } => Command::Fill {
                     rect: rect(*r).map_err(key("rect"))?,
                     color: Rgb::new(rgb[0], rgb[1], rgb[2]),
-                    state: state(*window, *plane_mask),
+                    alpha: alpha.unwrap_or(255),
+                    state: State {
+                        blend: blend_of(*blend, alpha.is_some()),
+                        ..state(*window, *plane_mask)
+                    },
                 },
                 CommandSpec::Zfill { rect: r, z, window } => Command::ZFill {
                     rect: rect(*r).map_err(key("rect"))?,

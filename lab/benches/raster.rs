@@ -181,6 +181,7 @@ fn raster(c: &mut Criterion) {
             rect: Rect::new(0, 0, T, T),
             color: Rgb::new(i * 16, 100, 200),
             state: State::default(),
+            alpha: 255,
         })
         .collect();
     let fpx = 16 * (T * T) as u64;

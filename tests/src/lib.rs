@@ -130,9 +130,10 @@ pub fn check_triangle(
 }
 
 /// A random command for a screen of about 100x80 pixels, drawing into window
-/// `wid`, sometimes with a partial plane mask: fills, Z fills, ramps (span
-/// commands whose colour and depth stay in range), styled lines,
-/// antialiased solid edges and triangles reaching beyond the screen.
+/// `wid`, sometimes with a partial plane mask, sometimes translucent (with
+/// or without Z write): fills, Z fills, ramps (span commands whose colour
+/// and depth stay in range), styled lines, antialiased solid edges and
+/// triangles reaching beyond the screen.
 pub fn random_command(rng: &mut Rng, wid: u8) -> Command {
     let mask = if rng.range(0, 4) == 0 {
         rng.next_u64() as u32
@@ -143,6 +144,11 @@ pub fn random_command(rng: &mut Rng, wid: u8) -> Command {
         wid,
         plane_mask: mask,
         tag: rng.range(0, 4) as u16,
+        blend: match rng.range(0, 6) {
+            0 => Blend::Alpha,
+            1 => Blend::AlphaZWrite,
+            _ => Blend::Opaque,
+        },
     };
     match rng.range(0, 7) {
         6 => {
@@ -183,6 +189,7 @@ pub fn random_command(rng: &mut Rng, wid: u8) -> Command {
         0 => Command::Fill {
             rect: rng.rect((-20, 100), (-20, 80), 90, 70),
             color: rng.rgb(),
+            alpha: rng.range(0, 256) as u8,
             state,
         },
         1 => Command::ZFill {
@@ -212,11 +219,14 @@ pub fn random_command(rng: &mut Rng, wid: u8) -> Command {
                 dcolor: c.map(|(_, d)| ColorStep::from_bits(d as i32)),
                 z: ZFix::from_bits(z as u32),
                 dz: ZStep::from_bits(dz as i32),
+                alpha: rng.range(0, 256) as u8,
             };
             Command::Span { span, state }
         }
         _ => Command::Triangle {
-            v: rng.triangle((-400, 1900), (-400, 1500)),
+            v: rng
+                .triangle((-400, 1900), (-400, 1500))
+                .map(|v| v.with_alpha(rng.range(0, 256) as u8)),
             state,
         },
     }

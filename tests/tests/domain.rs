@@ -161,6 +161,7 @@ proptest! {
             dcolor: c.map(|(_, d)| ColorStep::from_bits(d)),
             z: ZFix::from_bits(z.0),
             dz: ZStep::from_bits(z.1),
+            alpha: 255,
         };
         let cmd = [Command::Span { span, state: State::default() }];
         let mut cfg = config(W, H, FormatKind::Rgb888);

@@ -27,6 +27,7 @@ fn frame(seed: u64, half: Half) -> Vec<Command> {
             rect: screen,
             color: Rgb::new(seed as u8, 40, 200),
             state,
+            alpha: 255,
         },
         Command::ZFill {
             rect: screen,

@@ -145,6 +145,7 @@ fn longest_span_and_out_of_range_spans() {
         dcolor: [ColorStep::from_bits(1386), ColorStep::ZERO, ColorStep::ZERO], // 255/12096 per pixel
         z: ZFix::ZERO,
         dz: ZStep::ZERO,
+        alpha: 255,
     };
     assert_eq!(span.validate(), Ok(()));
     let r = render(

@@ -543,8 +543,20 @@ fn report(reports: &[BoardResult]) -> String {
             "large_gouraud_z_wid_dither8_rgb565",
             large_px,
         ),
+        (
+            "large triangles: Gouraud + Z, alpha-blended (per-vertex α)",
+            "large_blend_z_rgb565",
+            large_px,
+        ),
     ];
     md += &table_rows(&boards, &rows);
+    md += "| **ratio** alpha-blended / opaque (large, Gouraud + Z; target ≤ 1.5 on the M4) |";
+    for b in &boards {
+        let r =
+            b.benches["large_blend_z_rgb565"] as f64 / b.benches["large_gouraud_z_rgb565"] as f64;
+        md += &format!(" {r:.2} |");
+    }
+    md += "\n";
     md += "| **ratio** embedded-graphics flat / ours Gouraud |";
     for b in &boards {
         let ours = b.benches["gouraud_rgb565"] as f64 / tri_px as f64;

@@ -86,6 +86,7 @@ fn tile_rect_near_i32_max_is_refused_and_the_band_edge_draws() {
         rect: edge,
         color: white,
         state: State::new(3),
+        alpha: 255,
     })
     .unwrap();
     for x in edge.x..edge.x1() as i32 {
@@ -99,6 +100,7 @@ fn tile_rect_near_i32_max_is_refused_and_the_band_edge_draws() {
         rect: edge,
         color: white,
         state: State::default(),
+        alpha: 255,
     })
     .unwrap();
     assert!(t.finish());

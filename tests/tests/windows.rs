@@ -52,7 +52,7 @@ proptest! {
         // A background that differs per window so that writes are visible.
         let mut base = windows();
         for w in 0..4u8 {
-            base.push(Command::Fill { rect: Rect::new(0, 0, W as u32, H as u32), color: Rgb::new(w * 60, 255 - w * 50, 7), state: State { wid: w, ..State::default() } });
+            base.push(Command::fill(Rect::new(0, 0, W as u32, H as u32), Rgb::new(w * 60, 255 - w * 50, 7)).window(w));
             base.push(Command::ZFill { rect: Rect::new(0, 0, W as u32, H as u32), z: 30000, state: State { wid: w, ..State::default() } });
         }
         let before = render(&c, &base).unwrap();
@@ -80,14 +80,9 @@ fn isolation_is_not_vacuous() {
     c.wid = true;
     let mut cmds = windows();
     let before = render(&c, &cmds).unwrap();
-    cmds.push(Command::Fill {
-        rect: Rect::new(0, 0, W as u32, H as u32),
-        color: Rgb::new(255, 255, 255),
-        state: State {
-            wid: 2,
-            ..State::default()
-        },
-    });
+    cmds.push(
+        Command::fill(Rect::new(0, 0, W as u32, H as u32), Rgb::new(255, 255, 255)).window(2),
+    );
     let after = render(&c, &cmds).unwrap();
     let changed = (0..before.raw.len())
         .filter(|&i| before.raw[i] != after.raw[i])

@@ -245,8 +245,8 @@ mod tests {
             if !fits_i32(&v) {
                 continue;
             }
-            let a = TriangleSetup::<_, i32>::new::<Rgb565Format>(&v);
-            let b = TriangleSetup::<_, i64>::new::<Rgb565Format>(&v);
+            let a = TriangleSetup::<_, i32>::new::<Rgb565Format>(&v, true);
+            let b = TriangleSetup::<_, i64>::new::<Rgb565Format>(&v, true);
             let (Some(a), Some(b)) = (a, b) else {
                 assert!(a.is_none() && b.is_none());
                 continue;

@@ -10,7 +10,7 @@
 //! coverage plane ([`crate::raster::coverage`]) until the tile is resolved.
 
 use super::{Phase, Tile};
-use crate::command::{Command, SpanCmd, State};
+use crate::command::{Blend, Command, SpanCmd, State};
 use crate::config::TileConfig;
 use crate::error::Error;
 use crate::format::{ColorPlane, Lanes, PixelFormat, Rgb};
@@ -21,7 +21,7 @@ use crate::numeric::{Precision, COLOR_FRAC, SUBPIXEL as SUBPIXEL_I64, Z_FRAC};
 use crate::raster::coverage::{AaMode, AaPlane};
 use crate::raster::span::{quantize_color, quantize_z, SpanStart};
 use crate::raster::traverse::{Row, Spans};
-use crate::setup::{fits_i32, EdgeInt, TriangleSetup};
+use crate::setup::{alpha_weight, fits_i32, EdgeInt, TriangleSetup};
 
 impl<const N: usize, C, F, Z, W, D, A, P> Tile<N, C>
 where
@@ -44,10 +44,11 @@ where
     ///
     /// With coverage antialiasing a frame draws its commands twice
     /// ([`Tile::finish`] between): solids merge into the coverage plane in
-    /// the first pass; spans, lines and every command with a partial plane
-    /// mask are drawn over the resolved pixels in the second, so the mask
-    /// keeps the bits it protects (coverage samples hold whole colours,
-    /// not planes).
+    /// the first pass; spans, lines, translucent commands and every command
+    /// with a partial plane mask are drawn over the resolved pixels in the
+    /// second, so the mask keeps the bits it protects (coverage samples hold
+    /// whole colours, not planes) and a translucent command blends over the
+    /// finished solids.
     /// A triangle set up, and traversed from [`Phase::Traverse`] on, but
     /// not drawn: what the frame's phase counters measure before
     /// [`Phase::All`] ([`Frame::render_until`](crate::frame::Frame::render_until)).
@@ -65,17 +66,23 @@ where
 
     pub(crate) fn draw_valid(&mut self, cmd: &Command) {
         if A::SAMPLES > 0 {
-            let masked = match cmd {
+            // Masked and translucent solids go over the resolved pixels.
+            let late = match cmd {
                 Command::Triangle { state, .. } | Command::Fill { state, .. } => {
-                    state.plane_mask & F::MASK_ALL != F::MASK_ALL
+                    state.plane_mask & F::MASK_ALL != F::MASK_ALL || state.blend.translucent()
                 }
                 _ => false,
             };
             match (self.resolved, cmd) {
-                (false, Command::Triangle { .. } | Command::Fill { .. }) if masked => return,
-                (true, Command::Triangle { .. } | Command::Fill { .. }) if masked => {}
+                (false, Command::Triangle { .. } | Command::Fill { .. }) if late => return,
+                (true, Command::Triangle { .. } | Command::Fill { .. }) if late => {}
                 (false, Command::Triangle { v, state }) => return self.triangle_aa(v, state),
-                (false, Command::Fill { rect, color, state }) => {
+                (
+                    false,
+                    Command::Fill {
+                        rect, color, state, ..
+                    },
+                ) => {
                     // The colour plane keeps the background of the samples
                     // no fragment covers until the tile is resolved.
                     let (wid, c) = (state.wid, F::pack_rgb(*color));
@@ -103,18 +110,24 @@ where
         }
         match cmd {
             Command::Triangle { v, state } => {
+                let alpha = state.blend.translucent();
                 if fits_i32(v) {
-                    if let Some(t) = TriangleSetup::<_, i32>::new::<F>(v) {
+                    if let Some(t) = TriangleSetup::<_, i32>::new::<F>(v, alpha) {
                         self.triangle(&t, state);
                     }
-                } else if let Some(t) = TriangleSetup::<_, i64>::new::<F>(v) {
+                } else if let Some(t) = TriangleSetup::<_, i64>::new::<F>(v, alpha) {
                     self.triangle(&t, state);
                 }
             }
             Command::Span { span, state } => self.span_cmd(span, state),
             Command::Line { line, state } => self.line(line, state),
             Command::Edge { edge, state } => self.edge(edge, state),
-            Command::Fill { rect, color, state } => self.fill(rect, *color, state),
+            Command::Fill {
+                rect,
+                color,
+                alpha,
+                state,
+            } => self.fill(rect, *color, *alpha, state),
             Command::ZFill { rect, z, state } => {
                 let wid = state.wid;
                 self.for_each_pixel(rect, |t, i| {
@@ -131,7 +144,7 @@ where
     /// without drawing it.
     #[inline(always)]
     fn triangle_upto<const UPTO: u8, T: EdgeInt>(&mut self, v: &[crate::command::Vertex; 3]) {
-        let Some(t) = TriangleSetup::<_, T>::new::<F>(v) else {
+        let Some(t) = TriangleSetup::<_, T>::new::<F>(v, false) else {
             return;
         };
         if UPTO >= Phase::Traverse as u8 {
@@ -143,11 +156,29 @@ where
         }
     }
 
+    /// Draws a set-up triangle, opaque or blended by its state.
     #[inline(always)]
     fn triangle<T: EdgeInt>(&mut self, t: &TriangleSetup<F::Lanes, T>, st: &State) {
+        if st.blend.translucent() {
+            self.triangle_rows::<T, true>(t, st);
+        } else {
+            self.triangle_rows::<T, false>(t, st);
+        }
+    }
+
+    /// The rows of a triangle, each one span; `BLEND`: through
+    /// [`Self::blend_span`] with the triangle's blend-weight plane.
+    #[inline(always)]
+    fn triangle_rows<T: EdgeInt, const BLEND: bool>(
+        &mut self,
+        t: &TriangleSetup<F::Lanes, T>,
+        st: &State,
+    ) {
         let area = self.area;
         // Small triangles: the anchored planes, rounded once to the DDA's
         // precision; each row's start is `c + i gc + j gcy` (modulo 2^32).
+        // The blend weight keeps every fraction bit (it is not a DDA
+        // channel of the seed's datapath widths).
         let plane = SpanStart {
             c: t.c,
             dc: t.gc,
@@ -157,6 +188,7 @@ where
         .quantized::<P>();
         let (gcy, gzy) = (quantize_color::<P, _>(t.gcy), quantize_z::<P>(t.gzy));
         let (ax, ay) = (t.bounds.x as i64, t.bounds.y as i64);
+        let [a_anchor, ga, gay] = t.alpha;
         for Row {
             py,
             xr,
@@ -166,29 +198,47 @@ where
             e2,
         } in Spans::new(&t.e, &t.bounds, &area)
         {
-            let start = if T::EXACT_ROWS {
+            let (start, a) = if T::EXACT_ROWS {
                 // Restart from the plane equation at xr, then advance to x0
                 // by multiplication: exactly the values x0 - xr DDA steps
                 // give, so the output does not depend on the tiling.
                 let (c, z) = t.start(e1, e2);
-                SpanStart {
+                let k = x0 - xr;
+                let a = if BLEND {
+                    t.alpha_start(e1, e2)
+                        .wrapping_add((k as i32).wrapping_mul(ga))
+                } else {
+                    0
+                };
+                let s = SpanStart {
                     c,
                     dc: t.gc,
                     z,
                     dz: t.gz,
-                }
-                .quantized::<P>()
-                .advanced(x0 - xr)
+                };
+                (s.quantized::<P>().advanced(k), a)
             } else {
                 let j = (py - ay) as i32;
-                SpanStart {
+                let s = SpanStart {
                     c: plane.c.zip(gcy, |c, g| c.wrapping_add(j.wrapping_mul(g))),
                     z: plane.z.wrapping_add(j.wrapping_mul(gzy)),
                     ..plane
-                }
-                .advanced(x0 - ax)
+                };
+                let i = (x0 - ax) as i32;
+                let a = if BLEND {
+                    a_anchor
+                        .wrapping_add(j.wrapping_mul(gay))
+                        .wrapping_add(i.wrapping_mul(ga))
+                } else {
+                    0
+                };
+                (s.advanced(x0 - ax), a)
             };
-            self.span(x0, py, x1 - x0, start, st);
+            if BLEND {
+                self.blend_span(x0, py, x1 - x0, start, (a, ga), st);
+            } else {
+                self.span(x0, py, x1 - x0, start, st);
+            }
         }
     }
 
@@ -213,8 +263,7 @@ where
         } else {
             (a.x as i64, a.x1(), a.y as i64, a.y1())
         };
-        let c = l.color;
-        let c = F::lanes_from_rgb([c.r as i64, c.g as i64, c.b as i64].map(|v| v << COLOR_FRAC));
+        let c = lanes::<F>(l.color);
         let xy = |major: i64, minor: i64| {
             if s.y_major {
                 (minor, major)
@@ -258,10 +307,7 @@ where
         } else {
             (a.x as i64, a.x1(), a.y as i64, a.y1())
         };
-        let lanes = |c: crate::format::Rgb| {
-            F::lanes_from_rgb([c.r as i64, c.g as i64, c.b as i64].map(|v| v << COLOR_FRAC))
-        };
-        let [ca, cb] = s.ends(e.v.map(|v| lanes(v.color)));
+        let [ca, cb] = s.ends(e.v.map(|v| lanes::<F>(v.color)));
         let (len, t0) = s.extent();
         // Colour at the first column's centre, t0 sub-pixels from a, and its
         // step per column: |cb - ca| < 2^24, so products stay below 2^42.
@@ -300,18 +346,125 @@ where
         if !self.wid.pass(idx, st.wid) || !self.depth.test(idx, z + (1 << (Z_FRAC - 1))) {
             return;
         }
-        let old = F::unpack_masked(self.color.get(idx), st.plane_mask & F::MASK_ALL);
-        let bias = round_bias::<D>();
-        // (line - old) has at most 8 integer bits; dropping 8 of its 16
-        // fraction bits keeps the product with w <= 256 within i32.
-        let v = c.zip(old, |line, bg| {
-            let bg = bg << COLOR_FRAC;
-            bg + (((line - bg) >> 8) * w) + bias
-        });
-        self.store::<true>(idx, x as u32, y as u32, v, st.plane_mask & F::MASK_ALL);
+        let mask = st.plane_mask & F::MASK_ALL;
+        let old = F::unpack_masked(self.color.get(idx), mask);
+        let v = mix(c, old, w, round_bias::<D>());
+        self.store::<true>(idx, x as u32, y as u32, v, mask);
     }
 
-    fn fill(&mut self, rect: &Rect, color: Rgb, st: &State) {
+    /// Draws `n >= 1` translucent pixels from screen `(x, y)` (clipped by
+    /// the caller): the span DDA of [`Self::span`] plus the blend weight
+    /// `(a, da)` (1/256 with 16 fraction bits), each fragment
+    /// `C_dst + (C_src - C_dst) w` ([`crate::command::Blend`]) after the
+    /// window-ID test and a Z test that writes only for
+    /// [`Blend::AlphaZWrite`]. Fills pass `ZTEST = false`: they have no depth.
+    #[inline(always)]
+    fn blend_span(
+        &mut self,
+        x: i64,
+        y: i64,
+        n: i64,
+        s: SpanStart<F::Lanes>,
+        (a, da): (i32, i32),
+        st: &State,
+    ) {
+        self.blend_span_z::<true>(x, y, n, s, (a, da), st);
+    }
+
+    #[inline(always)]
+    fn blend_span_z<const ZTEST: bool>(
+        &mut self,
+        x: i64,
+        y: i64,
+        n: i64,
+        s: SpanStart<F::Lanes>,
+        (a, da): (i32, i32),
+        st: &State,
+    ) {
+        let r = self.area;
+        let idx = ((y - r.y as i64) * r.w as i64 + (x - r.x as i64)) as usize;
+        let s = SpanStart {
+            z: s.z + (1 << (Z_FRAC - 1)),
+            ..s
+        };
+        // The weight rounds to nearest: bias folded into the start.
+        let a = (a.wrapping_add(1 << 15), da);
+        let mask = st.plane_mask & F::MASK_ALL;
+        let (xs, ys, n) = (x as u32, y as u32, n as usize);
+        match (st.blend == Blend::AlphaZWrite, mask == F::MASK_ALL, ZTEST) {
+            (_, true, false) => self.blend_loop::<0, false>(idx, xs, ys, n, s, a, st.wid, mask),
+            (_, false, false) => self.blend_loop::<0, true>(idx, xs, ys, n, s, a, st.wid, mask),
+            (false, true, true) => self.blend_loop::<1, false>(idx, xs, ys, n, s, a, st.wid, mask),
+            (false, false, true) => self.blend_loop::<1, true>(idx, xs, ys, n, s, a, st.wid, mask),
+            (true, true, true) => self.blend_loop::<2, false>(idx, xs, ys, n, s, a, st.wid, mask),
+            (true, false, true) => self.blend_loop::<2, true>(idx, xs, ys, n, s, a, st.wid, mask),
+        }
+    }
+
+    /// The translucent span loop: `ZMODE` 0 no Z test, 1 test, 2 test and
+    /// write.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn blend_loop<const ZMODE: u8, const MASKED: bool>(
+        &mut self,
+        mut idx: usize,
+        mut x: u32,
+        y: u32,
+        n: usize,
+        s: SpanStart<F::Lanes>,
+        (mut a, da): (i32, i32),
+        wid: u8,
+        mask: u32,
+    ) {
+        let bias = round_bias::<D>();
+        let (mut c, mut z) = (s.c, s.z);
+        let end = idx + n;
+        loop {
+            let pass = self.wid.pass(idx, wid)
+                && match ZMODE {
+                    0 => true,
+                    1 => self.depth.test(idx, z),
+                    _ => self.depth.test_and_set(idx, z),
+                };
+            if pass {
+                let raw = self.color.get(idx);
+                let old = if MASKED {
+                    F::unpack_masked(raw, mask)
+                } else {
+                    F::unpack(raw)
+                };
+                let v = mix(c, old, a >> 16, bias);
+                self.store::<MASKED>(idx, x, y, v, mask);
+            }
+            idx += 1;
+            if idx == end {
+                break;
+            }
+            x = x.wrapping_add(1);
+            c = c.zip(s.dc, |v, d| v + d);
+            z += s.dz;
+            a = a.wrapping_add(da);
+        }
+    }
+
+    fn fill(&mut self, rect: &Rect, color: Rgb, alpha: u8, st: &State) {
+        if st.blend.translucent() {
+            // Row by row through the translucent span loop, without Z.
+            let Some(r) = rect.intersect(&self.area) else {
+                return;
+            };
+            let s = SpanStart {
+                c: lanes::<F>(color),
+                dc: F::Lanes::from_fn(|_| 0),
+                z: 0,
+                dz: 0,
+            };
+            for y in r.y as i64..r.y1() {
+                let a = (alpha_weight(alpha), 0);
+                self.blend_span_z::<false>(r.x as i64, y, r.w as i64, s, a, st);
+            }
+            return;
+        }
         let c = F::pack_rgb(color);
         let mask = st.plane_mask & F::MASK_ALL;
         let wid = st.wid;
@@ -427,6 +580,30 @@ where
         let start = SpanStart { c, dc, z, dz }
             .quantized::<P>()
             .advanced(x0 - xr);
-        self.span(x0, s.y as i64, x1 - x0, start, st);
+        if st.blend.translucent() {
+            let a = (alpha_weight(s.alpha), 0);
+            self.blend_span(x0, s.y as i64, x1 - x0, start, a, st);
+        } else {
+            self.span(x0, s.y as i64, x1 - x0, start, st);
+        }
     }
+}
+
+/// A colour in the output channel scale with [`COLOR_FRAC`] fraction bits.
+#[inline(always)]
+fn lanes<F: PixelFormat>(c: Rgb) -> F::Lanes {
+    F::lanes_from_rgb([c.r as i64, c.g as i64, c.b as i64].map(|v| v << COLOR_FRAC))
+}
+
+/// `C_dst + (C_src - C_dst) w + bias` per lane: `src` in the output scale
+/// with [`COLOR_FRAC`] fraction bits, `dst` unpacked (whole output units),
+/// `w` in 1/256 (`0..=256`). `(src - dst)` has at most 8 integer bits;
+/// dropping 8 of its 16 fraction bits keeps the product within `i32` and
+/// costs less than 2^-8 of an output unit.
+#[inline(always)]
+fn mix<L: Lanes>(src: L, dst: L, w: i32, bias: i32) -> L {
+    src.zip(dst, |s, d| {
+        let d = d << COLOR_FRAC;
+        d + (((s - d) >> 8) * w) + bias
+    })
 }

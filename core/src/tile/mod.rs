@@ -83,7 +83,7 @@ impl Default for Clear {
 /// use tilerast::prelude::*;
 /// let mut tile: Tile<8, Planes<Rgb888Format, Depth16>> = Tile::new(); // 64 pixels
 /// tile.begin(Rect::new(16, 8, 8, 8), &Clear::default())?;
-/// tile.draw(&Command::Fill { rect: Rect::new(0, 0, 20, 10), color: Rgb::new(9, 8, 7), state: State::default() })?;
+/// tile.draw(&Command::fill(Rect::new(0, 0, 20, 10), Rgb::new(9, 8, 7)))?;
 /// assert_eq!(tile.raw(19, 9), Some(0x090807));
 /// assert_eq!(tile.raw(20, 9), Some(0));      // outside the fill
 /// assert_eq!(tile.raw(15, 9), None);         // outside the tile

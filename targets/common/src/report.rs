@@ -4,7 +4,8 @@
 //! print.
 
 use crate::workloads::{
-    self, EDGE_AA_CMDS, FILL_CMDS, LARGE_TRIANGLE_CMDS, LINE_CMDS, TRIANGLE_CMDS, WU_LINE_CMDS,
+    self, EDGE_AA_CMDS, FILL_CMDS, LARGE_BLEND_CMDS, LARGE_TRIANGLE_CMDS, LINE_CMDS, TRIANGLE_CMDS,
+    WU_LINE_CMDS,
 };
 use crate::{run_scene, Clock, SceneRun};
 use core::fmt::Write;
@@ -182,7 +183,8 @@ fn bench_one<C: TileConfig>(
 /// Prints `bench NAME ticks T` for each workload: flat fill; Gouraud
 /// alone, with Z, with Z and window ID, and with those and 8x8 dither (all
 /// RGB565); large Gouraud triangles alone, with Z, and with Z, window ID
-/// and dither; and with Z and every edge antialiased; the same triangles through `embedded-graphics`' `Triangle`
+/// and dither; the same translucent (alpha-blended, with Z); and with Z
+/// and every edge antialiased; the same triangles through `embedded-graphics`' `Triangle`
 /// fill; lines, Bresenham and two-point (Wu) antialiased, and the same
 /// lines through `embedded-graphics`' `Line`.
 pub fn report_benches(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt::Result {
@@ -229,6 +231,13 @@ pub fn report_benches(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt
     bench_one::<Planes<Rgb565Format, Depth16, Wid8, Bayer8>>(
         "large_gouraud_z_wid_dither8_rgb565",
         large,
+        Via::Ours,
+        out,
+        clock,
+    )?;
+    bench_one::<Planes<Rgb565Format, Depth16, NoWid, NoDither>>(
+        "large_blend_z_rgb565",
+        &LARGE_BLEND_CMDS,
         Via::Ours,
         out,
         clock,

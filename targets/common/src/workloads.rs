@@ -34,7 +34,11 @@ pub static EDGE_AA_CMDS: [Command; 4 * TRIANGLES] = with_edges();
 /// splitting the whole tile along a diagonal, random colours, each pair
 /// nearer than the last (every pixel passes the Z test and is stored: the
 /// per-pixel cost of a span, with few rows and setups to share it).
-pub static LARGE_TRIANGLE_CMDS: [Command; LARGE_TRIANGLES] = large_triangles();
+pub static LARGE_TRIANGLE_CMDS: [Command; LARGE_TRIANGLES] = large_triangles(false);
+/// The same triangles translucent ([`Blend::Alpha`], random opacity per
+/// vertex): every pixel passes the Z test and is blended over the last
+/// pair — the per-pixel cost of alpha blending beside the opaque one.
+pub static LARGE_BLEND_CMDS: [Command; LARGE_TRIANGLES] = large_triangles(true);
 /// Full-tile flat fills.
 pub static FILL_CMDS: [Command; FILLS] = fills();
 /// Lines across the tile in every direction, Bresenham.
@@ -109,22 +113,30 @@ const fn corner(x: i32, y: i32, z: u16, rng: &mut Rng) -> Vertex {
     Vertex::new(Coord::from_bits(x), Coord::from_bits(y), z, rng.rgb())
 }
 
-const fn large_triangles() -> [Command; LARGE_TRIANGLES] {
+const fn large_triangles(blend: bool) -> [Command; LARGE_TRIANGLES] {
     let mut rng = Rng::new(0x6c61_7267_6574_7269);
     let side = SIDE as i32 * 16;
     let mut out = [PLACEHOLDER; LARGE_TRIANGLES];
     let mut i = 0;
     while i < LARGE_TRIANGLES {
         let z = 60000 - 7000 * (i / 2) as u16;
-        let (a, c) = (corner(0, 0, z, &mut rng), corner(side, side, z, &mut rng));
-        let (b, d) = (corner(side, 0, z, &mut rng), corner(0, side, z, &mut rng));
+        let (mut a, mut c) = (corner(0, 0, z, &mut rng), corner(side, side, z, &mut rng));
+        let (mut b, mut d) = (corner(side, 0, z, &mut rng), corner(0, side, z, &mut rng));
+        let mut state = State::new(0);
+        if blend {
+            state.blend = Blend::Alpha;
+            a.alpha = rng.rgb().r;
+            b.alpha = rng.rgb().r;
+            c.alpha = rng.rgb().r;
+            d.alpha = rng.rgb().r;
+        }
         out[i] = Command::Triangle {
             v: [a, b, c],
-            state: State::new(0),
+            state,
         };
         out[i + 1] = Command::Triangle {
             v: [a, c, d],
-            state: State::new(0),
+            state,
         };
         i += 2;
     }
@@ -159,11 +171,7 @@ const fn fills() -> [Command; FILLS] {
     while i < FILLS {
         let k = i as u8;
         let color = Rgb::new(k * 30, 90, 200 - k * 20);
-        out[i] = Command::Fill {
-            rect: Rect::new(0, 0, SIDE, SIDE),
-            color,
-            state: State::new(0),
-        };
+        out[i] = Command::fill(Rect::new(0, 0, SIDE, SIDE), color);
         i += 1;
     }
     out
@@ -231,9 +239,12 @@ pub fn covered_pixels(cmds: &[Command], side: u32) -> Result<u64, Error> {
                 }),
                 state,
             },
-            Command::Fill { rect, state, .. } => Command::Fill {
+            Command::Fill {
+                rect, state, alpha, ..
+            } => Command::Fill {
                 rect,
                 color: Rgb::new(255, 255, 255),
+                alpha,
                 state,
             },
             other => other,
