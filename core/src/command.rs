@@ -20,6 +20,12 @@ use crate::numeric::{ColorFix, ColorStep, ZFix, ZStep, COORD_LIMIT};
 /// translucent commands back to front is the application's business.
 /// Lines, antialiased edges and Z and window-ID fills ignore the mode.
 ///
+/// Blending is compiled only into tiles whose configuration asks for it
+/// ([`AlphaBlending`](crate::fragment::AlphaBlending) in
+/// [`Planes`](crate::config::Planes)); any other tile draws translucent
+/// commands opaque and carries no blending code (the host simulator
+/// always blends).
+///
 /// **Rounding.** The weight is `w = round(256 α / 255)` in 1/256 after
 /// interpolation, so `α = 255` replaces exactly and `α = 0` leaves the
 /// pixel; the blend is `C_dst + (C_src - C_dst) w / 256` in the output

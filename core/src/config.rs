@@ -29,12 +29,12 @@ use crate::format::{
     Rgb888Format,
 };
 use crate::fragment::dither::{Bayer4, Dither, NoDither};
-use crate::fragment::{Depth16, DepthMode, NoDepth, NoWid, WidMode};
+use crate::fragment::{BlendMode, Depth16, DepthMode, NoBlending, NoDepth, NoWid, WidMode};
 use crate::numeric::{FullPrecision, Precision};
 use crate::raster::coverage::{AaMode, NoAa};
 use core::marker::PhantomData;
 
-/// What a tile holds and how it writes: one type for the six choices.
+/// What a tile holds and how it writes: one type for the seven choices.
 pub trait TileConfig {
     /// Display format of the colour plane.
     type Format: PixelFormat;
@@ -48,15 +48,25 @@ pub trait TileConfig {
     type Aa: AaMode;
     /// Fraction bits of the span DDAs ([`FullPrecision`] or `Bits<C, Z>`).
     type Precision: Precision;
+    /// Whether translucent commands blend ([`NoBlending`] or
+    /// `AlphaBlending`): code, not a plane.
+    type Blending: BlendMode;
 }
 
 /// Any combination of planes: the full generic form of a [`TileConfig`].
-/// Unnamed planes default to absent, precision to full.
-pub struct Planes<F, Z = NoDepth, W = NoWid, D = NoDither, A = NoAa, P = FullPrecision>(
-    PhantomData<(F, Z, W, D, A, P)>,
-);
+/// Unnamed planes default to absent, precision to full, blending to none.
+#[allow(clippy::type_complexity)]
+pub struct Planes<
+    F,
+    Z = NoDepth,
+    W = NoWid,
+    D = NoDither,
+    A = NoAa,
+    P = FullPrecision,
+    B = NoBlending,
+>(PhantomData<(F, Z, W, D, A, P, B)>);
 
-impl<F, Z, W, D, A, P> TileConfig for Planes<F, Z, W, D, A, P>
+impl<F, Z, W, D, A, P, B> TileConfig for Planes<F, Z, W, D, A, P, B>
 where
     F: PixelFormat,
     Z: DepthMode,
@@ -64,6 +74,7 @@ where
     D: Dither,
     A: AaMode,
     P: Precision,
+    B: BlendMode,
 {
     type Format = F;
     type Depth = Z;
@@ -71,6 +82,7 @@ where
     type Dither = D;
     type Aa = A;
     type Precision = P;
+    type Blending = B;
 }
 
 /// A display format alone is a configuration: colour plane only, no
@@ -84,6 +96,7 @@ macro_rules! format_configs {
             type Dither = NoDither;
             type Aa = NoAa;
             type Precision = FullPrecision;
+            type Blending = NoBlending;
         }
     )*};
 }

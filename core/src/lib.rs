@@ -110,6 +110,7 @@ pub mod prelude {
     pub use crate::bin::Bins;
     pub use crate::command::{Blend, Command, SpanCmd, State, Vertex};
     pub use crate::config::{groups, Planes, Ssd1306Config, St7789Config, TileConfig};
+    pub use crate::coverage::NoAa;
     pub use crate::error::{Error, FlushError};
     pub use crate::format::{
         BinaryFormat, Gray8Format, Half, PixelFormat, Rgb, Rgb444, Rgb444Format, Rgb444PairFormat,
@@ -117,7 +118,8 @@ pub mod prelude {
     };
     pub use crate::fragment::dither::{Bayer, Bayer2, Bayer4, Bayer8, Dither, NoDither};
     pub use crate::fragment::{
-        Depth16, Depth24, Depth32, DepthMode, NoDepth, NoWid, Wid8, WidMode,
+        AlphaBlending, BlendMode, Depth16, Depth24, Depth32, DepthMode, NoBlending, NoDepth, NoWid,
+        Wid8, WidMode,
     };
     pub use crate::frame::{Clear, CommandSource, Damage, Frame, FrameStats, Phase};
     pub use crate::geom::Rect;

@@ -372,7 +372,7 @@ fn frame_and_tile<
     const G: usize,
 >(
     cfg: &Config,
-) -> Result<(Frame, Box<Tile<G, Planes<F, Z, W, D, A, P>>>), Error> {
+) -> Result<(Frame, Box<Tile<G, Planes<F, Z, W, D, A, P, AlphaBlending>>>), Error> {
     let (mut tw, mut th) = cfg.tile;
     while tw as usize * th as usize > G * 8 {
         if tw >= th {
@@ -452,7 +452,7 @@ where
         image,
         raw,
         depth,
-        bits_per_pixel: Tile::<G, Planes<F, Z, W, D, A, P>>::bits_per_pixel(),
+        bits_per_pixel: Tile::<G, Planes<F, Z, W, D, A, P, AlphaBlending>>::bits_per_pixel(),
         stats,
         ns_per_pixel: times.get(times.len() / 2).copied(),
     })

@@ -79,6 +79,36 @@ impl WidMode for NoWid {
     const BITS: u32 = 0;
 }
 
+/// Whether a tile's loops can alpha-blend ([`crate::command::Blend`]),
+/// chosen by type like a plane: a configuration without it compiles no
+/// blending code at all (what a Cortex-M0's flash needs), and draws
+/// translucent commands opaque.
+///
+/// ```
+/// use tilerast::prelude::*;
+/// type Glass = Planes<Rgb565Format, Depth16, NoWid, Bayer4, NoAa, FullPrecision, AlphaBlending>;
+/// assert!(<Glass as TileConfig>::Blending::ALPHA);
+/// assert!(!<St7789Config as TileConfig>::Blending::ALPHA);
+/// // Blending needs no plane: the destination colour is the colour plane.
+/// assert_eq!(Tile::<8, Glass>::bits_per_pixel(), Tile::<8, St7789Config>::bits_per_pixel());
+/// ```
+pub trait BlendMode: 'static {
+    /// Whether translucent commands blend.
+    const ALPHA: bool;
+}
+/// No blending: translucent commands are drawn opaque (the default).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NoBlending;
+/// Alpha blending compiled in: translucent commands blend.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct AlphaBlending;
+impl BlendMode for NoBlending {
+    const ALPHA: bool = false;
+}
+impl BlendMode for AlphaBlending {
+    const ALPHA: bool = true;
+}
+
 /// Depth- and window-ID-plane storage: the tile's internals.
 /// Public only with the `unstable` feature (the research crate and the
 /// tests use them); no stability promise.

@@ -235,7 +235,7 @@ pub fn report_benches(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt
         out,
         clock,
     )?;
-    bench_one::<Planes<Rgb565Format, Depth16, NoWid, NoDither>>(
+    bench_one::<Planes<Rgb565Format, Depth16, NoWid, NoDither, NoAa, FullPrecision, AlphaBlending>>(
         "large_blend_z_rgb565",
         &LARGE_BLEND_CMDS,
         Via::Ours,
