@@ -33,3 +33,8 @@ fn edges_match_golden() {
 fn ruf_matches_golden() {
     check("ruf");
 }
+
+#[test]
+fn glass_matches_golden() {
+    check("glass");
+}
