@@ -32,6 +32,8 @@ struct Report {
     instr_per_tick: f64,
     scenes: BTreeMap<String, SceneLine>,
     benches: BTreeMap<String, u64>,
+    /// The CRC32 of the tile each workload leaves.
+    bench_crcs: BTreeMap<String, u32>,
     /// Per scene: ticks until each phase (bin, clear, decode, setup, traverse, all).
     phases: BTreeMap<String, [u64; 6]>,
     /// The animated gauge: (frames, tiles, sent tiles, bytes full, bytes sent, ticks).
@@ -122,6 +124,9 @@ fn parse(out: &str) -> Report {
                 assert!(!w.contains(&"error"), "{line}");
                 r.benches
                     .insert(w[1].to_string(), field(&w, "ticks").parse().unwrap());
+                let crc = field(&w, "crc").trim_start_matches("0x");
+                r.bench_crcs
+                    .insert(w[1].to_string(), u32::from_str_radix(crc, 16).unwrap());
             }
             Some("phases") => {
                 assert!(!w.contains(&"error"), "{line}");
@@ -362,6 +367,13 @@ fn host_crc(name: &str, bytes: &[u8], tile: (u16, u16)) -> u32 {
     }
 }
 
+/// The CRC of the tile the translucent workload leaves, drawn on the host.
+fn host_blend_crc() -> u32 {
+    let mut tile: tilerast::tile::Tile<128, workloads::BlendBench> = tilerast::tile::Tile::new();
+    workloads::draw(&mut tile, &workloads::LARGE_BLEND_CMDS, &mut || 0).unwrap();
+    workloads::tile_crc(&tile)
+}
+
 #[test]
 #[ignore = "needs qemu-system-arm and the thumb targets: run `cargo xtask test`"]
 fn firmware_output_is_bit_identical_to_the_host() {
@@ -414,7 +426,16 @@ fn firmware_output_is_bit_identical_to_the_host() {
                 "{board}: instruction counts differ between runs"
             );
             r.benches.extend(b1.benches);
+            r.bench_crcs.extend(b1.bench_crcs);
         }
+        // The translucent workload leaves the same bytes as on the host.
+        let crc = r.bench_crcs["large_blend_z_rgb565"];
+        assert_eq!(
+            crc,
+            host_blend_crc(),
+            "{board}: translucent workload CRC 0x{crc:08x} differs from the host's"
+        );
+        println!("{board:>10} translucent workload: CRC 0x{crc:08x} = host");
         // The rotating mesh, frame by frame; the other back end's vertex
         // stage, hashed.
         assert!(

@@ -394,20 +394,36 @@ where
         let mask = st.plane_mask & F::MASK_ALL;
         let (xs, ys, n) = (x as u32, y as u32, n as usize);
         match (st.blend == Blend::AlphaZWrite, mask == F::MASK_ALL, ZTEST) {
-            (_, true, false) => self.blend_loop::<0, false>(idx, xs, ys, n, s, a, st.wid, mask),
-            (_, false, false) => self.blend_loop::<0, true>(idx, xs, ys, n, s, a, st.wid, mask),
-            (false, true, true) => self.blend_loop::<1, false>(idx, xs, ys, n, s, a, st.wid, mask),
-            (false, false, true) => self.blend_loop::<1, true>(idx, xs, ys, n, s, a, st.wid, mask),
-            (true, true, true) => self.blend_loop::<2, false>(idx, xs, ys, n, s, a, st.wid, mask),
-            (true, false, true) => self.blend_loop::<2, true>(idx, xs, ys, n, s, a, st.wid, mask),
+            (_, true, false) => {
+                self.span_loop::<BLEND_NO_Z, false>(idx, xs, ys, n, s, a, st.wid, mask)
+            }
+            (_, false, false) => {
+                self.span_loop::<BLEND_NO_Z, true>(idx, xs, ys, n, s, a, st.wid, mask)
+            }
+            (false, true, true) => {
+                self.span_loop::<BLEND, false>(idx, xs, ys, n, s, a, st.wid, mask)
+            }
+            (false, false, true) => {
+                self.span_loop::<BLEND, true>(idx, xs, ys, n, s, a, st.wid, mask)
+            }
+            (true, true, true) => {
+                self.span_loop::<BLEND_Z_WRITE, false>(idx, xs, ys, n, s, a, st.wid, mask)
+            }
+            (true, false, true) => {
+                self.span_loop::<BLEND_Z_WRITE, true>(idx, xs, ys, n, s, a, st.wid, mask)
+            }
         }
     }
 
-    /// The translucent span loop: `ZMODE` 0 no Z test, 1 test, 2 test and
-    /// write.
+    /// The span loop every span ends in: window-ID test, Z test, then the
+    /// one store path. `MODE` is [`OPAQUE`] (Z test and write, the fragment
+    /// replaces the pixel) or a translucent mode ([`BLEND_NO_Z`],
+    /// [`BLEND`], [`BLEND_Z_WRITE`]: the fragment blends over the pixel
+    /// with the weight `a`, stepped by `da`, which opaque spans leave
+    /// unused and the compiler removes).
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn blend_loop<const ZMODE: u8, const MASKED: bool>(
+    fn span_loop<const MODE: u8, const MASKED: bool>(
         &mut self,
         mut idx: usize,
         mut x: u32,
@@ -423,19 +439,23 @@ where
         let end = idx + n;
         loop {
             let pass = self.wid.pass(idx, wid)
-                && match ZMODE {
-                    0 => true,
-                    1 => self.depth.test(idx, z),
+                && match MODE {
+                    BLEND_NO_Z => true,
+                    BLEND => self.depth.test(idx, z),
                     _ => self.depth.test_and_set(idx, z),
                 };
             if pass {
-                let raw = self.color.get(idx);
-                let old = if MASKED {
-                    F::unpack_masked(raw, mask)
+                let v = if MODE == OPAQUE {
+                    c
                 } else {
-                    F::unpack(raw)
+                    let raw = self.color.get(idx);
+                    let old = if MASKED {
+                        F::unpack_masked(raw, mask)
+                    } else {
+                        F::unpack(raw)
+                    };
+                    mix(c, old, a >> 16, bias)
                 };
-                let v = mix(c, old, a >> 16, bias);
                 self.store::<MASKED>(idx, x, y, v, mask);
             }
             idx += 1;
@@ -445,7 +465,9 @@ where
             x = x.wrapping_add(1);
             c = c.zip(s.dc, |v, d| v + d);
             z += s.dz;
-            a = a.wrapping_add(da);
+            if MODE != OPAQUE {
+                a = a.wrapping_add(da);
+            }
         }
     }
 
@@ -518,37 +540,9 @@ where
         // bits reach the dither.
         let (xs, ys) = (x as u32, y as u32);
         if mask == F::MASK_ALL {
-            self.span_loop::<false>(idx, xs, ys, n as usize, s, st.wid, mask);
+            self.span_loop::<OPAQUE, false>(idx, xs, ys, n as usize, s, (0, 0), st.wid, mask);
         } else {
-            self.span_loop::<true>(idx, xs, ys, n as usize, s, st.wid, mask);
-        }
-    }
-
-    #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
-    fn span_loop<const MASKED: bool>(
-        &mut self,
-        mut idx: usize,
-        mut x: u32,
-        y: u32,
-        n: usize,
-        s: SpanStart<F::Lanes>,
-        wid: u8,
-        mask: u32,
-    ) {
-        let (mut c, mut z) = (s.c, s.z);
-        let end = idx + n;
-        loop {
-            if self.wid.pass(idx, wid) && self.depth.test_and_set(idx, z) {
-                self.store::<MASKED>(idx, x, y, c, mask);
-            }
-            idx += 1;
-            if idx == end {
-                break;
-            }
-            x = x.wrapping_add(1);
-            c = c.zip(s.dc, |v, d| v + d);
-            z += s.dz;
+            self.span_loop::<OPAQUE, true>(idx, xs, ys, n as usize, s, (0, 0), st.wid, mask);
         }
     }
 
@@ -590,6 +584,14 @@ where
         }
     }
 }
+
+/// Span-loop modes ([`Tile::span_loop`]): opaque (Z test and write, the
+/// bias already in the colour start); translucent without Z (fills), with
+/// the Z test, with the Z test and write.
+const OPAQUE: u8 = 0;
+const BLEND_NO_Z: u8 = 1;
+const BLEND: u8 = 2;
+const BLEND_Z_WRITE: u8 = 3;
 
 /// A colour in the output channel scale with [`COLOR_FRAC`] fraction bits.
 #[inline(always)]

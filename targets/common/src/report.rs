@@ -175,7 +175,11 @@ fn bench_one<C: TileConfig>(
         Via::EmbeddedGraphics => workloads::eg_primitives(&mut tile, cmds, clock),
     };
     match ticks {
-        Ok(t) => writeln!(out, "bench {name} ticks {t}"),
+        Ok(t) => writeln!(
+            out,
+            "bench {name} ticks {t} crc 0x{:08x}",
+            workloads::tile_crc(&tile)
+        ),
         Err(e) => writeln!(out, "bench {name} error {e}"),
     }
 }
@@ -235,7 +239,7 @@ pub fn report_benches(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt
         out,
         clock,
     )?;
-    bench_one::<Planes<Rgb565Format, Depth16, NoWid, NoDither, NoAa, FullPrecision, AlphaBlending>>(
+    bench_one::<workloads::BlendBench>(
         "large_blend_z_rgb565",
         &LARGE_BLEND_CMDS,
         Via::Ours,

@@ -191,6 +191,24 @@ pub fn draw<const N: usize, C: TileConfig>(
     Ok(clock.lap() as u64)
 }
 
+/// The tile configuration of the translucent workload ([`LARGE_BLEND_CMDS`]):
+/// RGB565 + Z16 with blending compiled in.
+pub type BlendBench =
+    Planes<Rgb565Format, Depth16, NoWid, NoDither, NoAa, FullPrecision, AlphaBlending>;
+
+/// CRC32 of a tile's packed pixels (row-major, each as 4 little-endian
+/// bytes): what the boards print after each workload, so the host can check
+/// that a workload draws the same bytes there.
+pub fn tile_crc<const N: usize, C: TileConfig>(tile: &Tile<N, C>) -> u32 {
+    let mut crc = tilerast::hash::Crc32::default();
+    for y in 0..SIDE as i32 {
+        for x in 0..SIDE as i32 {
+            crc.update(&tile.raw(x, y).unwrap_or(0).to_le_bytes());
+        }
+    }
+    crc.finish()
+}
+
 /// Ticks to draw the same commands with `embedded-graphics`' own
 /// primitives onto the tile as a `DrawTarget`: each triangle as a flat
 /// `Triangle` fill (first vertex's colour), each line as a 1-pixel `Line`;
