@@ -237,7 +237,7 @@ where
                 (s.advanced(x0 - ax), a)
             };
             if BLEND {
-                self.blend_span(x0, py, x1 - x0, start, (a, ga), st);
+                self.blend_span::<true>(x0, py, x1 - x0, start, (a, ga), st);
             } else {
                 self.span(x0, py, x1 - x0, start, st);
             }
@@ -361,20 +361,7 @@ where
     /// window-ID test and a Z test that writes only for
     /// [`Blend::AlphaZWrite`]. Fills pass `ZTEST = false`: they have no depth.
     #[inline(always)]
-    fn blend_span(
-        &mut self,
-        x: i64,
-        y: i64,
-        n: i64,
-        s: SpanStart<F::Lanes>,
-        (a, da): (i32, i32),
-        st: &State,
-    ) {
-        self.blend_span_z::<true>(x, y, n, s, (a, da), st);
-    }
-
-    #[inline(always)]
-    fn blend_span_z<const ZTEST: bool>(
+    fn blend_span<const ZTEST: bool>(
         &mut self,
         x: i64,
         y: i64,
@@ -393,25 +380,31 @@ where
         let a = (a.wrapping_add(1 << 15), da);
         let mask = st.plane_mask & F::MASK_ALL;
         let (xs, ys, n) = (x as u32, y as u32, n as usize);
-        match (st.blend == Blend::AlphaZWrite, mask == F::MASK_ALL, ZTEST) {
-            (_, true, false) => {
-                self.span_loop::<BLEND_NO_Z, false>(idx, xs, ys, n, s, a, st.wid, mask)
-            }
-            (_, false, false) => {
-                self.span_loop::<BLEND_NO_Z, true>(idx, xs, ys, n, s, a, st.wid, mask)
-            }
-            (false, true, true) => {
-                self.span_loop::<BLEND, false>(idx, xs, ys, n, s, a, st.wid, mask)
-            }
-            (false, false, true) => {
-                self.span_loop::<BLEND, true>(idx, xs, ys, n, s, a, st.wid, mask)
-            }
-            (true, true, true) => {
-                self.span_loop::<BLEND_Z_WRITE, false>(idx, xs, ys, n, s, a, st.wid, mask)
-            }
-            (true, false, true) => {
-                self.span_loop::<BLEND_Z_WRITE, true>(idx, xs, ys, n, s, a, st.wid, mask)
-            }
+        match (ZTEST, st.blend == Blend::AlphaZWrite) {
+            (false, _) => self.span_masked::<BLEND_NO_Z>(idx, xs, ys, n, s, a, st.wid, mask),
+            (true, false) => self.span_masked::<BLEND>(idx, xs, ys, n, s, a, st.wid, mask),
+            (true, true) => self.span_masked::<BLEND_Z_WRITE>(idx, xs, ys, n, s, a, st.wid, mask),
+        }
+    }
+
+    /// [`Self::span_loop`] with or without the plane mask.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn span_masked<const MODE: u8>(
+        &mut self,
+        idx: usize,
+        x: u32,
+        y: u32,
+        n: usize,
+        s: SpanStart<F::Lanes>,
+        a: (i32, i32),
+        wid: u8,
+        mask: u32,
+    ) {
+        if mask == F::MASK_ALL {
+            self.span_loop::<MODE, false>(idx, x, y, n, s, a, wid, mask);
+        } else {
+            self.span_loop::<MODE, true>(idx, x, y, n, s, a, wid, mask);
         }
     }
 
@@ -485,7 +478,7 @@ where
             };
             for y in r.y as i64..r.y1() {
                 let a = (alpha_weight(alpha), 0);
-                self.blend_span_z::<false>(r.x as i64, y, r.w as i64, s, a, st);
+                self.blend_span::<false>(r.x as i64, y, r.w as i64, s, a, st);
             }
             return;
         }
@@ -539,11 +532,7 @@ where
         // Screen addresses are non-negative inside a tile; only their low
         // bits reach the dither.
         let (xs, ys) = (x as u32, y as u32);
-        if mask == F::MASK_ALL {
-            self.span_loop::<OPAQUE, false>(idx, xs, ys, n as usize, s, (0, 0), st.wid, mask);
-        } else {
-            self.span_loop::<OPAQUE, true>(idx, xs, ys, n as usize, s, (0, 0), st.wid, mask);
-        }
+        self.span_masked::<OPAQUE>(idx, xs, ys, n as usize, s, (0, 0), st.wid, mask);
     }
 
     /// The span command: clipped to the tile. Its values are converted to
@@ -578,7 +567,7 @@ where
             .advanced(x0 - xr);
         if B::ALPHA && st.blend.translucent() {
             let a = (alpha_weight(s.alpha), 0);
-            self.blend_span(x0, s.y as i64, x1 - x0, start, a, st);
+            self.blend_span::<true>(x0, s.y as i64, x1 - x0, start, a, st);
         } else {
             self.span(x0, s.y as i64, x1 - x0, start, st);
         }
