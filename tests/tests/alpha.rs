@@ -159,13 +159,13 @@ fn opaque_commands_ignore_alpha() {
 fn alpha_costs_no_command_bytes() {
     // Opacity lives in the padding of `Vertex`, `SpanCmd` and the fill;
     // the blend mode in `State`'s: a display list is no larger than before
-    // blending existed (60 bytes a command then; 56 now, because the
-    // enum's spare values hold the command's discriminant; the same on
-    // 64-bit hosts and on the Cortex-M: no field is pointer-sized).
+    // blending existed (60 bytes a command, a tag byte and the largest
+    // variant; the same on 64-bit hosts and on the Cortex-M: no field is
+    // pointer-sized).
     assert_eq!(core::mem::size_of::<Vertex>(), 16);
     assert_eq!(core::mem::size_of::<State>(), 8);
     assert_eq!(core::mem::size_of::<SpanCmd>(), 44);
-    assert_eq!(core::mem::size_of::<Command>(), 56);
+    assert_eq!(core::mem::size_of::<Command>(), 60);
 }
 
 #[test]
