@@ -188,11 +188,8 @@ pub(crate) struct TriangleSetup<L: Lanes, T> {
 
 /// A vertex's opacity as a blend weight in 1/256 with 16 fraction bits:
 /// `round(256 α / 255 · 2^16) = 65793 α + round(α / 255)`, so `α = 255`
-/// weighs exactly `2^24` (replace) and `α = 0` nothing. No division.
-///
-/// ```ignore
-/// assert_eq!(alpha_weight(255), 1 << 24);
-/// ```
+/// weighs exactly `2^24` (replace) and `α = 0` nothing. No division
+/// (checked against the division for every `α` in this module's tests).
 #[inline(always)]
 pub(crate) const fn alpha_weight(alpha: u8) -> i32 {
     alpha as i32 * 65793 + (alpha >> 7) as i32
@@ -399,4 +396,19 @@ impl<L: Lanes, T: EdgeInt> TriangleSetup<L, T> {
 fn lerp(a0: i32, d1: i32, d2: i32, w1: i64, w2: i64) -> i32 {
     let half = 1i64 << (W_FRAC - 1);
     a0 + ((d1 as i64 * w1 + d2 as i64 * w2 + half) >> W_FRAC) as i32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::alpha_weight;
+
+    #[test]
+    fn alpha_weight_is_the_rounded_quotient() {
+        for a in 0..=255u8 {
+            let exact = ((a as i64) << 24) as f64 / 255.0;
+            assert_eq!(alpha_weight(a) as i64, exact.round() as i64, "{a}");
+        }
+        assert_eq!(alpha_weight(255), 1 << 24);
+        assert_eq!(alpha_weight(0), 0);
+    }
 }

@@ -231,7 +231,8 @@ fn small(v: &Vertex) -> bool {
 /// ```
 /// use tilerast::prelude::*;
 /// use tilerast::wire;
-/// let cmd = Command::Fill { rect: Rect::new(1, 2, 3, 4), color: Rgb::new(5, 6, 7), state: State::default() };
+/// let cmd = Command::Fill { rect: Rect::new(1, 2, 3, 4), color: Rgb::new(5, 6, 7), alpha: 96, state: State::default() }
+///     .blend(Blend::Alpha);
 /// let mut buf = [0u8; wire::MAX_ENCODED];
 /// let n = wire::encode(&cmd, &mut buf)?;
 /// assert_eq!(wire::decode(&buf[..n])?, (cmd, n));
