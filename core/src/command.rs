@@ -6,7 +6,7 @@
 use crate::error::Error;
 use crate::format::Rgb;
 use crate::geom::Rect;
-pub use crate::geom::Vertex;
+pub use crate::geom::{QuadVertex, Vertex};
 use crate::numeric::{ColorFix, ColorStep, ZFix, ZStep, COORD_LIMIT};
 
 /// How a command's fragments combine with the colour plane: replace it
@@ -190,6 +190,51 @@ pub enum Command {
         /// Window ID and plane mask.
         state: State,
     },
+    /// A quadratically shaded, Z-tested triangle (either winding): the RE's
+    /// fast Phong (seed 001 §IV.2). Each channel is the quadratic through
+    /// the three vertex colours and the three edge-midpoint colours
+    /// ([`QuadVertex::mid`]), stepped by second-order forward differences:
+    /// two additions per channel and pixel. The geometry stage fills the
+    /// midpoints from the lighting ([`crate::geometry::Shading::FastPhong`]).
+    ///
+    /// A sliver — `κ² (|M| + 16) > 2^45`, with `κ = max over edges of
+    /// (|dy| bw + |dx| bh) / area2` (sub-pixels; `bw`, `bh` the vertices'
+    /// extent plus one pixel) and `|M|` the largest `|2 mid - c_p - c_q|`
+    /// over edges and channels: a triangle so much thinner than its box
+    /// that even an `f64` setup would lose precision for its curvature
+    /// (past `2^16` the setup already runs in `f64`) — is
+    /// drawn Gouraud-shaded, as are all quadratic triangles in tiles configured without quadratic shading
+    /// ([`QuadraticShading`](crate::fragment::QuadraticShading) in
+    /// [`Planes`](crate::config::Planes)) and under coverage antialiasing.
+    Quadratic {
+        /// Opacity of the whole triangle when the command blends
+        /// ([`Blend`]); ignored otherwise. (First, so that the command
+        /// packs tightly.)
+        alpha: u8,
+        /// The vertices with their edges' midpoint colours.
+        v: [QuadVertex; 3],
+        /// Window ID and plane mask.
+        state: State,
+    },
+    /// A textured, Z-tested triangle (either winding), seed 001 §IV.3:
+    /// texture `tex` of the frame's ([`crate::frame::WithTextures`]),
+    /// mapped through the vertices' `u`, `v`, `q` with the tile's
+    /// perspective mode ([`crate::texture::TextureMode`]) and modulated by
+    /// the Gouraud-interpolated grey `shade` (255: the texel itself).
+    /// Tiles without texturing, and a `tex` past the frame's textures,
+    /// draw the shade alone.
+    Textured {
+        /// Index of the texture.
+        tex: u8,
+        /// Opacity of the whole triangle when the command blends.
+        alpha: u8,
+        /// Light at each vertex, `0..=255`, multiplying the texel.
+        shade: [u8; 3],
+        /// The vertices.
+        v: [crate::texture::TexVertex; 3],
+        /// Window ID and plane mask.
+        state: State,
+    },
     /// A span with per-pixel colour and depth steps.
     Span {
         /// The span.
@@ -256,6 +301,47 @@ impl Command {
             v,
             state: State::new(0),
         }
+    }
+
+    /// A quadratically shaded (fast Phong) triangle in window 0, opaque.
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// let q = |x: i32, y: i32| QuadVertex::new(Vertex::new(Coord::from_num(x), Coord::from_num(y), 9, Rgb::new(90, 0, 0)), Rgb::new(120, 0, 0));
+    /// let t = Command::quadratic([q(0, 0), q(8, 0), q(0, 8)]);
+    /// assert_eq!(t.bounds(), Some(Rect::new(0, 0, 8, 8)));
+    /// assert_eq!(core::mem::size_of::<Command>(), 64);
+    /// ```
+    pub const fn quadratic(v: [QuadVertex; 3]) -> Command {
+        Command::Quadratic {
+            alpha: 255,
+            v,
+            state: State::new(0),
+        }
+    }
+
+    /// A textured triangle in window 0, opaque, drawing texture `tex`
+    /// modulated by the vertices' `shade` ([`Command::Textured`]).
+    pub const fn textured(tex: u8, v: [crate::texture::TexVertex; 3], shade: [u8; 3]) -> Command {
+        Command::Textured {
+            tex,
+            alpha: 255,
+            shade,
+            v,
+            state: State::new(0),
+        }
+    }
+
+    /// The plain vertices of a textured triangle: position, depth, shade.
+    pub(crate) fn textured_vertices(
+        v: &[crate::texture::TexVertex; 3],
+        shade: &[u8; 3],
+    ) -> [Vertex; 3] {
+        [
+            v[0].vertex(shade[0]),
+            v[1].vertex(shade[1]),
+            v[2].vertex(shade[2]),
+        ]
     }
 
     /// A span in window 0 ([`SpanCmd`]).
@@ -353,6 +439,8 @@ impl Command {
     pub const fn state(&self) -> Option<&State> {
         match self {
             Command::Triangle { state, .. }
+            | Command::Quadratic { state, .. }
+            | Command::Textured { state, .. }
             | Command::Span { state, .. }
             | Command::Line { state, .. }
             | Command::Edge { state, .. }
@@ -366,6 +454,8 @@ impl Command {
     pub const fn state_mut(&mut self) -> Option<&mut State> {
         match self {
             Command::Triangle { state, .. }
+            | Command::Quadratic { state, .. }
+            | Command::Textured { state, .. }
             | Command::Span { state, .. }
             | Command::Line { state, .. }
             | Command::Edge { state, .. }
@@ -379,6 +469,13 @@ impl Command {
     pub fn validate(&self) -> Result<(), Error> {
         match self {
             Command::Triangle { v, .. } => v.iter().try_for_each(Vertex::validate),
+            Command::Quadratic { v, .. } => v.iter().try_for_each(|q| q.vertex().validate()),
+            Command::Textured { v, .. } => v.iter().try_for_each(|t| {
+                if t.q == 0 {
+                    return Err(Error::Degenerate);
+                }
+                t.vertex(0).validate()
+            }),
             Command::Span { span, .. } => span.validate(),
             Command::Line { line, .. } => line.validate(),
             Command::Edge { edge, .. } => edge.validate(),
@@ -392,6 +489,8 @@ impl Command {
     pub fn coverage_bounds(&self) -> Option<Rect> {
         match self {
             Command::Triangle { v, .. } => Some(crate::geom::cell_bounds(v)),
+            Command::Quadratic { v, .. } => Some(crate::geom::cell_bounds(&v.map(|q| q.vertex()))),
+            Command::Textured { v, .. } => Some(crate::geom::cell_bounds(&v.map(|t| t.vertex(0)))),
             _ => self.bounds(),
         }
     }
@@ -400,6 +499,8 @@ impl Command {
     pub fn bounds(&self) -> Option<Rect> {
         match self {
             Command::Triangle { v, .. } => crate::geom::pixel_bounds(v),
+            Command::Quadratic { v, .. } => crate::geom::pixel_bounds(&v.map(|q| q.vertex())),
+            Command::Textured { v, .. } => crate::geom::pixel_bounds(&v.map(|t| t.vertex(0))),
             Command::Span { span, .. } if span.len > 0 => {
                 Some(Rect::new(span.x, span.y, span.len as u32, 1))
             }
@@ -419,7 +520,38 @@ impl Command {
 #[cfg(feature = "defmt")]
 mod log {
     use super::{SpanCmd, Vertex};
+    use crate::geom::QuadVertex;
     use crate::raster::line::{EdgeCmd, LineCmd};
+    use crate::texture::TexVertex;
+
+    impl defmt::Format for TexVertex {
+        fn format(&self, f: defmt::Formatter) {
+            defmt::write!(
+                f,
+                "TexVertex {{ x: {}/16, y: {}/16, z: {}, u: {}/16, v: {}/16, q: {} }}",
+                self.x.to_bits(),
+                self.y.to_bits(),
+                self.z,
+                self.u,
+                self.v,
+                self.q
+            )
+        }
+    }
+
+    impl defmt::Format for QuadVertex {
+        fn format(&self, f: defmt::Formatter) {
+            defmt::write!(
+                f,
+                "QuadVertex {{ x: {}/16, y: {}/16, z: {}, color: {}, mid: {} }}",
+                self.x.to_bits(),
+                self.y.to_bits(),
+                self.z,
+                self.color,
+                self.mid
+            )
+        }
+    }
 
     impl defmt::Format for Vertex {
         fn format(&self, f: defmt::Formatter) {

@@ -1,6 +1,7 @@
 //! Tile configurations: one type names every plane of a tile — colour
-//! format, depth, window ID, dither, coverage antialiasing and precision —
-//! so a program writes `Tile<N, St7789Config>` instead of seven parameters, and
+//! format, depth, window ID, dither, coverage antialiasing, precision, blending
+//! and shading —
+//! so a program writes `Tile<N, St7789Config>` instead of eight parameters, and
 //! the frame, the overlay and the firmware helpers carry one name.
 //!
 //! Every plane the configuration leaves out is a zero-sized type: it costs
@@ -29,12 +30,15 @@ use crate::format::{
     Rgb888Format,
 };
 use crate::fragment::dither::{Bayer4, Dither, NoDither};
-use crate::fragment::{BlendMode, Depth16, DepthMode, NoBlending, NoDepth, NoWid, WidMode};
+use crate::fragment::{
+    BlendMode, Depth16, DepthMode, GouraudShading, NoBlending, NoDepth, NoWid, ShadingMode, WidMode,
+};
 use crate::numeric::{FullPrecision, Precision};
 use crate::raster::coverage::{AaMode, NoAa};
+use crate::texture::{NoTexturing, TextureMode};
 use core::marker::PhantomData;
 
-/// What a tile holds and how it writes: one type for the seven choices.
+/// What a tile holds and how it writes: one type for the nine choices.
 pub trait TileConfig {
     /// Display format of the colour plane.
     type Format: PixelFormat;
@@ -51,10 +55,18 @@ pub trait TileConfig {
     /// Whether translucent commands blend ([`NoBlending`] or
     /// `AlphaBlending`): code, not a plane.
     type Blending: BlendMode;
+    /// Whether quadratic (fast Phong) triangles are stepped quadratically
+    /// ([`GouraudShading`] or `QuadraticShading`): code, not a plane.
+    type Shading: ShadingMode;
+    /// How textured triangles map their textures
+    /// ([`crate::texture::NoTexturing`], `AffineTexturing`,
+    /// `QuadraticTexturing`, `ExactTexturing`): code, not a plane.
+    type Texturing: TextureMode;
 }
 
 /// Any combination of planes: the full generic form of a [`TileConfig`].
-/// Unnamed planes default to absent, precision to full, blending to none.
+/// Unnamed planes default to absent, precision to full, blending to none,
+/// shading to Gouraud, texturing to none.
 #[allow(clippy::type_complexity)]
 pub struct Planes<
     F,
@@ -64,9 +76,11 @@ pub struct Planes<
     A = NoAa,
     P = FullPrecision,
     B = NoBlending,
->(PhantomData<(F, Z, W, D, A, P, B)>);
+    S = GouraudShading,
+    X = NoTexturing,
+>(PhantomData<(F, Z, W, D, A, P, B, S, X)>);
 
-impl<F, Z, W, D, A, P, B> TileConfig for Planes<F, Z, W, D, A, P, B>
+impl<F, Z, W, D, A, P, B, S, X> TileConfig for Planes<F, Z, W, D, A, P, B, S, X>
 where
     F: PixelFormat,
     Z: DepthMode,
@@ -75,6 +89,8 @@ where
     A: AaMode,
     P: Precision,
     B: BlendMode,
+    S: ShadingMode,
+    X: TextureMode,
 {
     type Format = F;
     type Depth = Z;
@@ -83,6 +99,8 @@ where
     type Aa = A;
     type Precision = P;
     type Blending = B;
+    type Shading = S;
+    type Texturing = X;
 }
 
 /// A display format alone is a configuration: colour plane only, no
@@ -97,6 +115,8 @@ macro_rules! format_configs {
             type Aa = NoAa;
             type Precision = FullPrecision;
             type Blending = NoBlending;
+            type Shading = GouraudShading;
+            type Texturing = NoTexturing;
         }
     )*};
 }

@@ -58,6 +58,11 @@ pub trait CommandSource {
     fn each(&self, mut f: impl FnMut(&Command)) -> Result<(), Error> {
         self.each_keyed(|_, c| f(c))
     }
+    /// The textures the source's textured triangles index
+    /// ([`WithTextures`]); none by default.
+    fn textures(&self) -> &[crate::texture::Texture<'_>] {
+        &[]
+    }
 }
 
 impl CommandSource for [Command] {
@@ -357,7 +362,7 @@ impl Frame {
                             // One out-of-line call per command: inlined
                             // here, the whole pipeline in one function
                             // spilled more than the call costs (measured).
-                            tile.draw_valid(cmd);
+                            tile.draw_valid(cmd, cmds.textures());
                         } else {
                             tile.draw_upto::<UPTO>(cmd);
                         }
@@ -592,5 +597,49 @@ impl<const N: usize, C: TileConfig, S: CommandSource + ?Sized> embedded_graphics
             Err(FlushError::Raster(e)) => Ok(Err(e)),
             Err(FlushError::Target(e)) => Err(e),
         }
+    }
+}
+
+/// A command source with the textures its textured triangles name: what
+/// [`Frame`] renders when a scene is textured.
+///
+/// ```
+/// use tilerast::prelude::*;
+/// static CHECKER: [u8; 4] = [0, 255, 255, 0];
+/// let tex = [Texture::new(&CHECKER, 2, 2, TexFormat::Gray8)?];
+/// let tv = |x: i32, y: i32, u: f32, v: f32| TexVertex::new(Coord::from_num(x), Coord::from_num(y), 0, (u, v), 1);
+/// let list = [Command::textured(0, [tv(0, 0, 0.0, 0.0), tv(8, 0, 2.0, 0.0), tv(0, 8, 0.0, 2.0)], [255; 3])];
+/// type T = Tile<{ groups(8, 8) }, Planes<Gray8Format, NoDepth, NoWid, NoDither, NoAa, FullPrecision, NoBlending, GouraudShading, AffineTexturing>>;
+/// let frame = T::frame::<8, 8>(8, 8)?;
+/// let mut tile = T::new();
+/// frame.render_with(&mut tile, &WithTextures::new(&list[..], &tex), |_| Ok::<(), ()>(()))
+///     .map_err(|_| Error::BadSize)?;
+/// // Texel (0, 0) is black, (1, 0) white: each covers 4 x 4 pixels.
+/// assert_eq!((tile.raw(1, 1), tile.raw(5, 1)), (Some(0), Some(255)));
+/// # Ok::<(), Error>(())
+/// ```
+#[derive(Debug, Clone, Copy)]
+pub struct WithTextures<'a, S: ?Sized> {
+    cmds: &'a S,
+    textures: &'a [crate::texture::Texture<'a>],
+}
+
+impl<'a, S: CommandSource + ?Sized> WithTextures<'a, S> {
+    /// `cmds` drawn with `textures` (a textured triangle's `tex` indexes
+    /// them; one past the end draws its shade).
+    pub const fn new(cmds: &'a S, textures: &'a [crate::texture::Texture<'a>]) -> Self {
+        WithTextures { cmds, textures }
+    }
+}
+
+impl<S: CommandSource + ?Sized> CommandSource for WithTextures<'_, S> {
+    fn each_keyed(&self, f: impl FnMut(u32, &Command)) -> Result<(), Error> {
+        self.cmds.each_keyed(f)
+    }
+    fn replay(&self, keys: impl Iterator<Item = u32>, f: impl FnMut(&Command)) {
+        self.cmds.replay(keys, f)
+    }
+    fn textures(&self) -> &[crate::texture::Texture<'_>] {
+        self.textures
     }
 }

@@ -204,6 +204,53 @@ impl Vertex {
     }
 }
 
+/// A vertex of a quadratically shaded triangle ([`crate::command::Command::Quadratic`],
+/// the RE's fast Phong, seed 001 §IV.2): a [`Vertex`] without opacity plus
+/// the colour at the midpoint of the edge to the next vertex. Three vertex
+/// and three midpoint colours fix a quadratic per channel over the
+/// triangle; 16 bytes, like [`Vertex`].
+///
+/// ```
+/// use tilerast::prelude::*;
+/// let v = Vertex::new(Coord::from_num(1), Coord::from_num(2), 3, Rgb::new(4, 5, 6));
+/// let q = QuadVertex::new(v, Rgb::new(7, 8, 9));
+/// assert_eq!((q.vertex(), q.mid), (v, Rgb::new(7, 8, 9)));
+/// assert_eq!(core::mem::size_of::<QuadVertex>(), 16);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct QuadVertex {
+    /// Column in pixels (4 sub-pixel bits).
+    pub x: Coord,
+    /// Row in pixels (4 sub-pixel bits), growing downwards.
+    pub y: Coord,
+    /// Depth, 0 nearest.
+    pub z: u16,
+    /// Colour at the vertex.
+    pub color: Rgb,
+    /// Colour at the midpoint of the edge from this vertex to the next
+    /// (vertex 2's edge goes back to vertex 0).
+    pub mid: Rgb,
+}
+
+impl QuadVertex {
+    /// A vertex's position, depth and colour, and the colour at the
+    /// midpoint of its edge to the next vertex.
+    pub const fn new(v: Vertex, mid: Rgb) -> Self {
+        QuadVertex {
+            x: v.x,
+            y: v.y,
+            z: v.z,
+            color: v.color,
+            mid,
+        }
+    }
+
+    /// The vertex without its midpoint colour (opaque).
+    pub const fn vertex(&self) -> Vertex {
+        Vertex::new(self.x, self.y, self.z, self.color)
+    }
+}
+
 /// The pixels whose centres can lie inside the triangle, or `None`.
 ///
 /// Validated coordinates are below 2^18 sub-pixels, so this is `i32` math,

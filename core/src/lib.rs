@@ -93,6 +93,7 @@ pub use fragment::dither;
 pub mod config;
 pub mod frame;
 pub mod geometry;
+pub mod texture;
 pub mod tile;
 
 // Beside the pipeline.
@@ -108,7 +109,7 @@ pub use fixed;
 /// Everything a firmware author needs, in one import.
 pub mod prelude {
     pub use crate::bin::Bins;
-    pub use crate::command::{Blend, Command, SpanCmd, State, Vertex};
+    pub use crate::command::{Blend, Command, QuadVertex, SpanCmd, State, Vertex};
     pub use crate::config::{groups, Planes, Ssd1306Config, St7789Config, TileConfig};
     pub use crate::coverage::NoAa;
     pub use crate::error::{Error, FlushError};
@@ -118,15 +119,19 @@ pub mod prelude {
     };
     pub use crate::fragment::dither::{Bayer, Bayer2, Bayer4, Bayer8, Dither, NoDither};
     pub use crate::fragment::{
-        AlphaBlending, BlendMode, Depth16, Depth24, Depth32, DepthMode, NoBlending, NoDepth, NoWid,
-        Wid8, WidMode,
+        AlphaBlending, BlendMode, Depth16, Depth24, Depth32, DepthMode, GouraudShading, NoBlending,
+        NoDepth, NoWid, QuadraticShading, ShadingMode, Wid8, WidMode,
     };
-    pub use crate::frame::{Clear, CommandSource, Damage, Frame, FrameStats, Phase};
+    pub use crate::frame::{Clear, CommandSource, Damage, Frame, FrameStats, Phase, WithTextures};
     pub use crate::geom::Rect;
     pub use crate::list::DisplayList;
     pub use crate::numeric::{
         Bits, ColorFix, ColorStep, Coord, FullPrecision, Precision, ZFix, ZStep,
     };
     pub use crate::raster::line::{LineCmd, LineStyle};
+    pub use crate::texture::{
+        AffineTexturing, ExactTexturing, Filter, NoTexturing, QuadraticTexturing, TexFormat,
+        TexVertex, Texture, TextureMode, Wrap,
+    };
     pub use crate::tile::Tile;
 }

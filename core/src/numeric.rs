@@ -187,7 +187,7 @@ pub(crate) struct Divisor {
 impl Divisor {
     /// For `d > 0`.
     #[inline]
-    pub(crate) fn new(d: i64) -> Self {
+    pub(crate) const fn new(d: i64) -> Self {
         let d = d as u64;
         Divisor { d, r: u64::MAX / d }
     }

@@ -21,6 +21,10 @@
 //! | 8 | line | `x0, y0, x1, y1: i32, z0, z1: u16, r, g, b, pattern: u16, scale: u8, phase: u16, antialias: u8` |
 //! | 9 | antialiased solid edge, 32-bit coordinates | 2 x (`x: i32, y: i32, z: u16, r, g, b`), `interior: u8` (0 left, 1 right) |
 //! | 10 | antialiased solid edge, 16-bit coordinates | 2 x (`x: i16, y: i16, z: u16, r, g, b`), `interior: u8` |
+//! | 11 | quadratic (fast Phong) triangle, 32-bit coordinates | 3 x (`x: i32, y: i32, z: u16, r, g, b`, midpoint `r, g, b`), then one α |
+//! | 12 | quadratic triangle, 16-bit coordinates | 3 x (`x: i16, y: i16, z: u16, r, g, b`, midpoint `r, g, b`), then one α |
+//! | 13 | textured triangle, 32-bit coordinates | `tex: u8`, 3 x (`x: i32, y: i32, z: u16`, `u, v, q: u16`, `shade: u8`), then one α |
+//! | 14 | textured triangle, 16-bit coordinates | `tex: u8`, 3 x (`x: i16, y: i16, z: u16`, `u, v, q: u16`, `shade: u8`), then one α |
 //! | 7 | indexed mesh: triangles sharing vertices | `nv: u16, nt: u16`, `nv` x (`x: i16, y: i16, z: u16, r, g, b`), `nt` x 3 x `u16` index |
 //!
 //! A mesh record replays as its `nt` triangles, in order, each with the
@@ -29,12 +33,13 @@
 //!
 //! Decoding validates every command ([`Command::validate`]).
 
-use crate::command::{Blend, Command, SpanCmd, State, Vertex};
+use crate::command::{Blend, Command, QuadVertex, SpanCmd, State, Vertex};
 use crate::error::Error;
 use crate::format::Rgb;
 use crate::geom::Rect;
 use crate::numeric::{ColorFix, ColorStep, Coord, ZFix, ZStep};
 use crate::raster::line::{EdgeCmd, LineCmd, LineStyle, Side};
+use crate::texture::TexVertex;
 
 const MASK_FLAG: u8 = 0x80;
 const TAG_FLAG: u8 = 0x40;
@@ -87,6 +92,18 @@ impl Writer<'_> {
     /// A vertex: `x, y` as `i16` (`small`) or `i32` sub-pixels, `z`, colour
     /// \[, α\].
     fn vertex(&mut self, v: &Vertex, small: bool) -> Result<(), Error> {
+        self.point(v, small)?;
+        self.alpha(v.alpha)
+    }
+
+    /// A vertex without its α.
+    fn point(&mut self, v: &Vertex, small: bool) -> Result<(), Error> {
+        self.xyz(v, small)?;
+        self.put(&[v.color.r, v.color.g, v.color.b])
+    }
+
+    /// A vertex's position and depth.
+    fn xyz(&mut self, v: &Vertex, small: bool) -> Result<(), Error> {
         if small {
             self.put(&(v.x.to_bits() as i16).to_le_bytes())?;
             self.put(&(v.y.to_bits() as i16).to_le_bytes())?;
@@ -94,9 +111,7 @@ impl Writer<'_> {
             self.put(&v.x.to_bits().to_le_bytes())?;
             self.put(&v.y.to_bits().to_le_bytes())?;
         }
-        self.put(&v.z.to_le_bytes())?;
-        self.put(&[v.color.r, v.color.g, v.color.b])?;
-        self.alpha(v.alpha)
+        self.put(&v.z.to_le_bytes())
     }
 
     fn put(&mut self, bytes: &[u8]) -> Result<(), Error> {
@@ -147,18 +162,24 @@ impl Reader<'_> {
     // the Cortex-M0 (measured under QEMU).
     #[inline(always)]
     fn vertex(&mut self, small: bool) -> Result<Vertex, Error> {
+        let v = self.point(small)?;
+        Ok(v.with_alpha(self.alpha()?))
+    }
+    /// A vertex without its α (opaque).
+    #[inline(always)]
+    fn point(&mut self, small: bool) -> Result<Vertex, Error> {
+        let (x, y, z) = self.xyz(small)?;
+        Ok(Vertex::new(x, y, z, self.rgb()?))
+    }
+    /// A position and depth.
+    #[inline(always)]
+    fn xyz(&mut self, small: bool) -> Result<(Coord, Coord, u16), Error> {
         let (x, y) = if small {
             (self.i16()? as i32, self.i16()? as i32)
         } else {
             (self.i32()?, self.i32()?)
         };
-        Ok(Vertex::new(
-            Coord::from_bits(x),
-            Coord::from_bits(y),
-            self.u16()?,
-            self.rgb()?,
-        )
-        .with_alpha(self.alpha()?))
+        Ok((Coord::from_bits(x), Coord::from_bits(y), self.u16()?))
     }
     fn rgb(&mut self) -> Result<Rgb, Error> {
         let [r, g, b] = self.take()?;
@@ -253,6 +274,34 @@ pub fn encode(cmd: &Command, buf: &mut [u8]) -> Result<usize, Error> {
                 w.vertex(v, small)?;
             }
         }
+        Command::Quadratic { alpha, v, state } => {
+            let small = v.iter().all(|q| small(&q.vertex()));
+            w.head(if small { 12 } else { 11 }, state, *alpha != 255)?;
+            for q in v {
+                w.point(&q.vertex(), small)?;
+                w.put(&[q.mid.r, q.mid.g, q.mid.b])?;
+            }
+            w.alpha(*alpha)?;
+        }
+        Command::Textured {
+            tex,
+            alpha,
+            shade,
+            v,
+            state,
+        } => {
+            let small = v.iter().all(|t| small(&t.vertex(0)));
+            w.head(if small { 14 } else { 13 }, state, *alpha != 255)?;
+            w.put(&[*tex])?;
+            for (t, l) in v.iter().zip(shade) {
+                w.xyz(&t.vertex(0), small)?;
+                for c in [t.u, t.v, t.q] {
+                    w.put(&c.to_le_bytes())?;
+                }
+                w.put(&[*l])?;
+            }
+            w.alpha(*alpha)?;
+        }
         Command::Edge { edge, state } => {
             let small = edge.v.iter().all(small);
             let alpha = edge.v.iter().any(|v| v.alpha != 255);
@@ -328,6 +377,37 @@ pub fn decode(buf: &[u8]) -> Result<(Command, usize), Error> {
         t @ (1 | 2) => {
             let v = [r.vertex(t == 2)?, r.vertex(t == 2)?, r.vertex(t == 2)?];
             Command::Triangle { v, state }
+        }
+        t @ (11 | 12) => {
+            let mut q = || -> Result<QuadVertex, Error> {
+                let v = r.point(t == 12)?;
+                Ok(QuadVertex::new(v, r.rgb()?))
+            };
+            let v = [q()?, q()?, q()?];
+            Command::Quadratic {
+                alpha: r.alpha()?,
+                v,
+                state,
+            }
+        }
+        t @ (13 | 14) => {
+            let tex = r.u8()?;
+            let mut shade = [0u8; 3];
+            let mut one = |l: &mut u8| -> Result<TexVertex, Error> {
+                let (x, y, z) = r.xyz(t == 14)?;
+                let (u, v, q) = (r.u16()?, r.u16()?, r.u16()?);
+                *l = r.u8()?;
+                Ok(TexVertex { x, y, z, u, v, q })
+            };
+            let [l0, l1, l2] = &mut shade;
+            let v = [one(l0)?, one(l1)?, one(l2)?];
+            Command::Textured {
+                tex,
+                alpha: r.alpha()?,
+                shade,
+                v,
+                state,
+            }
         }
         t @ (9 | 10) => {
             let v = [r.vertex(t == 10)?, r.vertex(t == 10)?];

@@ -18,10 +18,11 @@ pub mod render;
 /// The deterministic PRNG, shared with the firmware workloads.
 pub use tilerast_fw::rng;
 pub mod scene;
+pub mod texscene;
 
 pub use display::PngDisplay;
 pub use error::{Error, Location, Result};
 pub use image::Image;
 pub use obj::Limits;
-pub use render::{render, AaKind, Config, FormatKind, Rendered};
+pub use render::{render, render_textured, AaKind, Config, FormatKind, Rendered, TexKind};
 pub use scene::Scene;

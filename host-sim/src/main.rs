@@ -41,6 +41,19 @@ enum Backend {
     Fixed,
 }
 
+/// Shading of meshes between their vertices.
+#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
+enum ShadingArg {
+    /// Lit at the vertices, interpolated linearly (the core).
+    Gouraud,
+    /// Lit at the vertices and edge midpoints, interpolated quadratically
+    /// (the core: seed 001 §IV.2).
+    FastPhong,
+    /// The normal interpolated and normalised at every pixel (the f64
+    /// reference renderer; no firmware path).
+    Phong,
+}
+
 /// A switch.
 #[derive(Clone, Copy, clap::ValueEnum)]
 enum OnOff {
@@ -73,6 +86,11 @@ enum Cmd {
         /// buffer with 4/8/16 samples, or supersampling.
         #[arg(long, value_enum)]
         aa: Option<tilerast_sim::AaKind>,
+        /// Override every mesh's shading: `gouraud`, `fast-phong` (both
+        /// drawn by the core) or `phong` (exact, drawn by the f64
+        /// reference renderer).
+        #[arg(long, value_enum)]
+        shading: Option<ShadingArg>,
     },
     /// Render a scene with the f64 reference renderer.
     Reference {
@@ -149,8 +167,14 @@ fn run(cli: Cli) -> tilerast_sim::Result<()> {
             line_aa,
             edge_aa,
             aa,
+            shading,
         } => {
-            let mut s = load(&scene)?;
+            use tilerast_sim::mesh::ShadingKind;
+            let kind = shading.map(|k| match k {
+                ShadingArg::FastPhong => ShadingKind::FastPhong,
+                ShadingArg::Gouraud | ShadingArg::Phong => ShadingKind::Gouraud,
+            });
+            let mut s = Scene::load_shaded(&scene, &limits, kind)?;
             if let Some(aa) = aa {
                 if aa != tilerast_sim::AaKind::None && ![0, 4, 8].contains(&s.config.dither) {
                     return Err(Error::Unsupported(format!(
@@ -199,7 +223,25 @@ fn run(cli: Cli) -> tilerast_sim::Result<()> {
                 "binning    {} tiles, {} command replays",
                 r.stats.tiles, r.stats.replayed
             );
-            r.image.save_png(&output)?;
+            let quads = s
+                .commands
+                .iter()
+                .filter(|c| matches!(c, tilerast::command::Command::Quadratic { .. }))
+                .count();
+            if shading == Some(ShadingArg::Phong) {
+                println!(
+                    "shading    exact Phong on {} triangles: the f64 reference renderer (per-pixel normals)",
+                    s.phong.len()
+                );
+                s.exact_phong().to_image().save_png(&output)?;
+            } else {
+                if quads > 0 {
+                    println!(
+                        "shading    fast Phong on {quads} triangles (quadratic, seed 001 §IV.2)"
+                    );
+                }
+                r.image.save_png(&output)?;
+            }
             println!("wrote      {}", output.display());
             if let Some(path) = ref_out {
                 let img = reference::render(c, &s.commands).to_image();

@@ -97,6 +97,30 @@ pub struct MeshSpec {
     /// Add the `.mtl` specular term (`Ks`, `Ns`; Blinn-Phong per vertex).
     #[serde(default)]
     pub specular: bool,
+    /// Shading between the vertices: `"gouraud"` (default) or
+    /// `"fast_phong"` (the RE's quadratic shading, seed 001 §IV.2).
+    #[serde(default)]
+    pub shading: ShadingKind,
+}
+
+/// How the core's geometry stage shades a mesh ([`tilerast::geometry::Shading`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ShadingKind {
+    /// Lit at the vertices, interpolated linearly.
+    #[default]
+    Gouraud,
+    /// Lit at the vertices and edge midpoints, interpolated quadratically.
+    FastPhong,
+}
+
+impl From<ShadingKind> for tilerast::geometry::Shading {
+    fn from(k: ShadingKind) -> Self {
+        match k {
+            ShadingKind::Gouraud => tilerast::geometry::Shading::Gouraud,
+            ShadingKind::FastPhong => tilerast::geometry::Shading::FastPhong,
+        }
+    }
 }
 
 impl MeshSpec {
@@ -164,6 +188,10 @@ pub struct MeshStats {
     pub obj_lines: usize,
     /// What the OBJ reader skipped or could not find, each naming its line.
     pub warnings: Vec<String>,
+    /// Exact Phong's shading ([`PhongTri`]) of the lit, unclipped triangle
+    /// commands this mesh pushed, by their index in the command list
+    /// (the core geometry back ends only).
+    pub phong: Vec<(usize, PhongTri)>,
 }
 
 /// The edges of a triangle set that border something else on screen: those
@@ -254,7 +282,9 @@ pub fn load(
 /// and clipped), the edges of its front faces, and its state.
 struct Projected {
     verts: Vec<Option<Vertex>>,
-    tris: Vec<[Vertex; 3]>,
+    /// Triangle commands (Gouraud or quadratic), with their exact Phong
+    /// shading where known.
+    tris: Vec<(Command, Option<PhongTri>)>,
     wire: std::collections::BTreeSet<(u32, u32)>,
     kd: V3,
     state: State,
@@ -496,12 +526,20 @@ pub fn build(
     let mut solids = Vec::new();
     for (g, mesh) in groups.iter().zip(&obj.models) {
         if spec.faces {
-            for t in &g.tris {
-                out.push(Command::Triangle {
-                    v: *t,
-                    state: g.state,
+            for (cmd, phong) in &g.tris {
+                let mut cmd = *cmd;
+                if let Some(st) = cmd.state_mut() {
+                    *st = g.state;
+                }
+                solids.push(match cmd {
+                    Command::Quadratic { v, .. } => v.map(|q| q.vertex()),
+                    Command::Triangle { v, .. } => v,
+                    _ => unreachable!("the geometry stage emits triangles"),
                 });
-                solids.push(*t);
+                if let Some(p) = phong {
+                    stats.phong.push((out.len(), p.clone()));
+                }
+                out.push(cmd);
             }
         }
         // The OBJ's own line elements, in the group's unlit colour.
@@ -631,6 +669,7 @@ fn draw_all<'a, S: Real>(
         } else {
             Cull::None
         },
+        shading: spec.shading.into(),
         ..DrawOptions::default()
     };
     for (k, m) in meshes.iter().enumerate() {
@@ -674,6 +713,7 @@ fn project_core<S: Real>(
     let Some(scene) = draw_all::<S>(&mut slots, &parsed, spec, screen, &mut stats.warnings) else {
         return groups;
     };
+    let lights = std::rc::Rc::new(phong_lights(spec));
     let st = scene.stats();
     stats.culled = st.culled as usize;
     stats.clipped = st.clipped as usize;
@@ -702,13 +742,16 @@ fn project_core<S: Real>(
         let Some(&(first_global, _, gi, m, first)) = owner.get(at) else {
             return;
         };
-        if let Command::Triangle { v, .. } = cmd {
+        if let Command::Triangle { .. } | Command::Quadratic { .. } = cmd {
             let g = &mut groups[gi];
-            g.tris.push(*v);
+            let t = parsed[m].triangle(first + (tri - first_global) as u16);
+            let phong = (key & 7 == 0)
+                .then(|| phong_tri(&parsed[m], first + (tri - first_global) as u16, &t, &lights))
+                .flatten();
+            g.tris.push((*cmd, phong));
             if key & 7 == 0 {
                 // A whole (unclipped) triangle: its edges for the
                 // wireframe, as OBJ vertex indices.
-                let t = parsed[m].triangle(first + (tri - first_global) as u16);
                 let map = &cm.vertex_map[gi];
                 let obj_index = |mv: u16| {
                     map.iter()
@@ -763,6 +806,14 @@ impl RefCamera {
             light: norm(spec.light),
             ambient: spec.ambient,
         }
+    }
+
+    /// The inverse of [`rotate`](Self::rotate): world to model space.
+    fn unrotate(&self, p: V3) -> V3 {
+        let (s, c) = self.ry.sin_cos();
+        let p = [c * p[0] - s * p[2], p[1], s * p[0] + c * p[2]];
+        let (s, c) = self.rx.sin_cos();
+        [p[0], c * p[1] + s * p[2], -s * p[1] + c * p[2]]
     }
 
     fn rotate(&self, p: V3) -> V3 {
@@ -911,7 +962,13 @@ fn project_reference(
                         stats.culled += 1;
                         continue;
                     }
-                    g.tris.push([a, b, c]);
+                    g.tris.push((
+                        Command::Triangle {
+                            v: [a, b, c],
+                            state: g.state,
+                        },
+                        None,
+                    ));
                     for (i, j) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
                         g.wire.insert((i.min(j), i.max(j)));
                     }
@@ -1032,4 +1089,272 @@ pub fn vertex_stage_ns(
     }
     times.sort_by(f64::total_cmp);
     times[times.len() / 2] / vertices as f64
+}
+
+/// What exact Phong shades one triangle command with (`render --shading
+/// phong`, the f64 reference of fast Phong): its vertices' unit normals
+/// and colours and the draw's lights, all in model space as the core's
+/// geometry stage lights them. The normal is interpolated linearly in
+/// screen space (by the command's barycentric weights) and normalised at
+/// every pixel: classic Phong shading.
+#[derive(Debug, Clone)]
+pub struct PhongTri {
+    /// Unit normals at the command's vertices.
+    pub n: [V3; 3],
+    /// Diffuse colours at the vertices, `0..=255`.
+    pub kd: [V3; 3],
+    /// Ambient colours at the vertices, `0..=255`.
+    pub ka: [V3; 3],
+    /// Specular colour, `0..=255` (black: none).
+    pub ks: V3,
+    /// Specular exponent.
+    pub ns: u8,
+    /// The lights.
+    pub lights: std::rc::Rc<PhongLights>,
+}
+
+/// Lights of a draw in model space (f64).
+#[derive(Debug, Clone, Default)]
+pub struct PhongLights {
+    /// Per directional light: unit direction towards it, Blinn's half
+    /// vector (zero: no highlight) and colour.
+    pub lights: Vec<(V3, V3, V3)>,
+    /// Ambient light per channel.
+    pub ambient: V3,
+}
+
+impl PhongTri {
+    /// The colour at weights `w` (command vertex order) for the unit normal
+    /// `n`: ambient + Lambert + Blinn-Phong, as the core's geometry stage
+    /// lights a vertex, unrounded and saturated to `0..=255`.
+    pub fn lit(&self, n: V3, w: [f64; 3]) -> [f64; 3] {
+        let (mut diff, mut spec) = ([0.0; 3], [0.0; 3]);
+        for (dir, half, color) in &self.lights.lights {
+            let ndl = dot(n, *dir);
+            if ndl > 0.0 {
+                let ndh = dot(n, *half);
+                let p = if ndh > 0.0 {
+                    ndh.powi(self.ns.max(1) as i32)
+                } else {
+                    0.0
+                };
+                for k in 0..3 {
+                    diff[k] += color[k] * ndl;
+                    spec[k] += color[k] * p;
+                }
+            }
+        }
+        let at = |c: &[V3; 3], k: usize| (0..3).map(|i| w[i] * c[i][k]).sum::<f64>();
+        std::array::from_fn(|k| {
+            let v = at(&self.ka, k) * self.lights.ambient[k]
+                + at(&self.kd, k) * diff[k]
+                + self.ks[k] * spec[k];
+            v.clamp(0.0, 255.0)
+        })
+    }
+
+    /// Exact Phong at weights `w`: the normal interpolated and normalised.
+    pub fn exact(&self, w: [f64; 3]) -> [f64; 3] {
+        let n = std::array::from_fn(|k| (0..3).map(|i| w[i] * self.n[i][k]).sum());
+        self.lit(norm(n), w)
+    }
+
+    /// Bishop and Weimer's fast Phong (SIGGRAPH '86), the Taylor variant:
+    /// the exact Phong colour expanded to second order about the
+    /// triangle's centroid (screen-space interpolation makes it a function
+    /// of the weights, affine in `x, y`, so this is their quadratic in
+    /// `x, y`), evaluated at the vertices and edge midpoints — the six
+    /// colours of the core's [`Command::Quadratic`] that draws exactly
+    /// that quadratic. `None` where the expansion has no value (the
+    /// interpolated normal vanishes at the centroid).
+    pub fn taylor(&self) -> Option<([V3; 3], [V3; 3])> {
+        // Jets in (w1, w2) with w0 = 1 - w1 - w2, about (1/3, 1/3).
+        let w = [
+            Jet::new(1.0 / 3.0, [-1.0, -1.0]),
+            Jet::new(1.0 / 3.0, [1.0, 0.0]),
+            Jet::new(1.0 / 3.0, [0.0, 1.0]),
+        ];
+        let lerp = |c: &[V3; 3], k: usize| {
+            w.iter()
+                .zip(c)
+                .fold(Jet::c(0.0), |a, (wi, ci)| a.add(&wi.scale(ci[k])))
+        };
+        let n: [Jet; 3] = std::array::from_fn(|k| lerp(&self.n, k));
+        let len = n[0].mul(&n[0]).add(&n[1].mul(&n[1])).add(&n[2].mul(&n[2]));
+        if len.v <= 1e-12 {
+            return None;
+        }
+        let inv = len.sqrt().recip();
+        let nn: [Jet; 3] = std::array::from_fn(|k| n[k].mul(&inv));
+        let dotj = |d: &V3| {
+            nn[0]
+                .scale(d[0])
+                .add(&nn[1].scale(d[1]))
+                .add(&nn[2].scale(d[2]))
+        };
+        let (mut diff, mut spec) = ([Jet::c(0.0); 3], [Jet::c(0.0); 3]);
+        for (dir, half, color) in &self.lights.lights {
+            let ndl = dotj(dir);
+            // The branch taken at the centroid (the expansion point).
+            if ndl.v > 0.0 {
+                let ndh = dotj(half);
+                let p = if ndh.v > 0.0 {
+                    ndh.powi(self.ns.max(1) as u32)
+                } else {
+                    Jet::c(0.0)
+                };
+                for k in 0..3 {
+                    diff[k] = diff[k].add(&ndl.scale(color[k]));
+                    spec[k] = spec[k].add(&p.scale(color[k]));
+                }
+            }
+        }
+        let col: [Jet; 3] = std::array::from_fn(|k| {
+            lerp(&self.ka, k)
+                .scale(self.lights.ambient[k])
+                .add(&lerp(&self.kd, k).mul(&diff[k]))
+                .add(&spec[k].scale(self.ks[k]))
+        });
+        let at = |w1: f64, w2: f64| -> V3 {
+            std::array::from_fn(|k| {
+                col[k]
+                    .eval(w1 - 1.0 / 3.0, w2 - 1.0 / 3.0)
+                    .clamp(0.0, 255.0)
+            })
+        };
+        // Vertices (1,0,0), (0,1,0), (0,0,1); midpoints of 01, 12, 20.
+        Some((
+            [at(0.0, 0.0), at(1.0, 0.0), at(0.0, 1.0)],
+            [at(0.5, 0.0), at(0.5, 0.5), at(0.0, 0.5)],
+        ))
+    }
+}
+
+/// A second-order jet in two variables: value, gradient and Hessian
+/// (`xx, xy, yy`) — enough for an exact second-order Taylor expansion.
+#[derive(Debug, Clone, Copy)]
+struct Jet {
+    v: f64,
+    d: [f64; 2],
+    h: [f64; 3],
+}
+
+impl Jet {
+    fn new(v: f64, d: [f64; 2]) -> Jet {
+        Jet { v, d, h: [0.0; 3] }
+    }
+    fn c(v: f64) -> Jet {
+        Jet::new(v, [0.0; 2])
+    }
+    fn add(&self, o: &Jet) -> Jet {
+        Jet {
+            v: self.v + o.v,
+            d: [self.d[0] + o.d[0], self.d[1] + o.d[1]],
+            h: std::array::from_fn(|i| self.h[i] + o.h[i]),
+        }
+    }
+    fn scale(&self, s: f64) -> Jet {
+        Jet {
+            v: self.v * s,
+            d: self.d.map(|x| x * s),
+            h: self.h.map(|x| x * s),
+        }
+    }
+    fn mul(&self, o: &Jet) -> Jet {
+        let (a, b) = (self, o);
+        Jet {
+            v: a.v * b.v,
+            d: [a.d[0] * b.v + a.v * b.d[0], a.d[1] * b.v + a.v * b.d[1]],
+            h: [
+                a.h[0] * b.v + 2.0 * a.d[0] * b.d[0] + a.v * b.h[0],
+                a.h[1] * b.v + a.d[0] * b.d[1] + a.d[1] * b.d[0] + a.v * b.h[1],
+                a.h[2] * b.v + 2.0 * a.d[1] * b.d[1] + a.v * b.h[2],
+            ],
+        }
+    }
+    /// `f(self)` for `f` with value, first and second derivative `f0, f1, f2`.
+    fn chain(&self, f0: f64, f1: f64, f2: f64) -> Jet {
+        let d = self.d;
+        Jet {
+            v: f0,
+            d: d.map(|x| f1 * x),
+            h: [
+                f1 * self.h[0] + f2 * d[0] * d[0],
+                f1 * self.h[1] + f2 * d[0] * d[1],
+                f1 * self.h[2] + f2 * d[1] * d[1],
+            ],
+        }
+    }
+    fn sqrt(&self) -> Jet {
+        let s = self.v.sqrt();
+        self.chain(s, 0.5 / s, -0.25 / (s * self.v))
+    }
+    fn recip(&self) -> Jet {
+        let r = 1.0 / self.v;
+        self.chain(r, -r * r, 2.0 * r * r * r)
+    }
+    fn powi(&self, e: u32) -> Jet {
+        let n = e as f64;
+        let p = |k: i32| self.v.powi(k);
+        self.chain(
+            p(e as i32),
+            n * p(e as i32 - 1),
+            n * (n - 1.0) * p(e as i32 - 2),
+        )
+    }
+    fn eval(&self, x: f64, y: f64) -> f64 {
+        self.v
+            + self.d[0] * x
+            + self.d[1] * y
+            + 0.5 * (self.h[0] * x * x + 2.0 * self.h[1] * x * y + self.h[2] * y * y)
+    }
+}
+
+/// The lights of `spec` in model space, as the core's geometry stage turns
+/// them (`Lighting::white`: one light of intensity `1 - ambient`, Blinn's
+/// half vector for a viewer at infinity along the camera axis).
+fn phong_lights(spec: &MeshSpec) -> PhongLights {
+    let rf = RefCamera::new(spec, (1, 1));
+    let eye = norm(sub(spec.eye, spec.target));
+    let l = rf.light;
+    let half = norm(std::array::from_fn(|k| l[k] + eye[k]));
+    PhongLights {
+        lights: vec![(rf.unrotate(l), rf.unrotate(half), [1.0 - spec.ambient; 3])],
+        ambient: [spec.ambient; 3],
+    }
+}
+
+/// Exact Phong's data for triangle `t` (vertices `idx`) of a core mesh:
+/// `None` when the mesh has no normals.
+fn phong_tri(
+    mesh: &Mesh<'_>,
+    t: u16,
+    idx: &[u16; 3],
+    lights: &std::rc::Rc<PhongLights>,
+) -> Option<PhongTri> {
+    let group = (0..mesh.groups())
+        .map(|g| mesh.group(g))
+        .find(|g| t < g.first_triangle + g.triangles)?;
+    let m = group.material;
+    let c = |c: Rgb| [c.r, c.g, c.b].map(|v| v as f64);
+    let mut n = [[0.0; 3]; 3];
+    let (mut kd, mut ka) = ([[0.0; 3]; 3], [[0.0; 3]; 3]);
+    for k in 0..3 {
+        n[k] = norm(mesh.normal(idx[k])?.map(|v| v as f64 / 32767.0));
+        let vc = mesh.color(idx[k]);
+        kd[k] = c(vc.unwrap_or(m.kd));
+        ka[k] = c(if vc.is_some() {
+            vc.unwrap_or(m.kd)
+        } else {
+            m.ka
+        });
+    }
+    Some(PhongTri {
+        n,
+        kd,
+        ka,
+        ks: c(m.ks),
+        ns: m.ns,
+        lights: lights.clone(),
+    })
 }

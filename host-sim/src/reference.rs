@@ -49,6 +49,78 @@ fn rgb(c: Rgb) -> [f64; 3] {
 
 /// Renders `cmds` in f64.
 pub fn render(cfg: &Config, cmds: &[Command]) -> RefFrame {
+    render_shaded(cfg, cmds, &|_, _| None)
+}
+
+/// Renders `cmds` in f64 with `textures` for their textured triangles
+/// ([`Command::Textured`]): the exact perspective coordinates
+/// `u = Σ w_k u_k q_k / Σ w_k q_k` at every pixel centre, the texture
+/// sampled there in f64 (nearest: the texel holding it; bilinear: the four
+/// around `u - 1/2` with exact weights; wrap as the texture says), times
+/// the Gouraud-interpolated shade `/ 255`. Without textures (or a `tex`
+/// past them) a textured triangle draws its shade, as the core does.
+pub fn render_textured(cfg: &Config, cmds: &[Command], textures: &[Texture<'_>]) -> RefFrame {
+    render_full(cfg, cmds, &|_, _| None, textures)
+}
+
+/// The filtered colour of `t` at `(u, v)` texels, in f64 ([`render_textured`]).
+pub fn sample(t: &Texture<'_>, u: f64, v: f64) -> [f64; 3] {
+    let (wrap, filter) = t.modes();
+    let (w, h) = t.size();
+    let at = |i: f64, n: u16| -> u32 {
+        let i = i as i64;
+        match wrap {
+            Wrap::Clamp => i.clamp(0, n as i64 - 1) as u32,
+            Wrap::Repeat => i.rem_euclid(n as i64) as u32,
+        }
+    };
+    match filter {
+        Filter::Nearest => rgb(t.texel(at(u.floor(), w), at(v.floor(), h))),
+        Filter::Bilinear => {
+            let (u, v) = (u - 0.5, v - 0.5);
+            let (i, j) = (u.floor(), v.floor());
+            let (fu, fv) = (u - i, v - j);
+            let c = |di: f64, dj: f64| rgb(t.texel(at(i + di, w), at(j + dj, h)));
+            let (a, b, c, d) = (c(0.0, 0.0), c(1.0, 0.0), c(0.0, 1.0), c(1.0, 1.0));
+            std::array::from_fn(|k| {
+                let top = a[k] * (1.0 - fu) + b[k] * fu;
+                let bot = c[k] * (1.0 - fu) + d[k] * fu;
+                top * (1.0 - fv) + bot * fv
+            })
+        }
+    }
+}
+
+/// The exact texture coordinates (texels) of a textured triangle at
+/// barycentric weights `w` (command vertex order).
+pub fn tex_coords(v: &[TexVertex; 3], w: [f64; 3]) -> (f64, f64) {
+    let q: f64 = (0..3).map(|k| w[k] * v[k].q as f64).sum();
+    let s = |f: fn(&TexVertex) -> u16| {
+        (0..3)
+            .map(|k| w[k] * v[k].q as f64 * f(&v[k]) as f64)
+            .sum::<f64>()
+            / (16.0 * q)
+    };
+    (s(|t| t.u), s(|t| t.v))
+}
+
+/// A triangle's colour at a point from its barycentric weights (in the
+/// command's vertex order), or `None` for the command's own shading.
+pub type Shader<'a> = dyn Fn(usize, [f64; 3]) -> Option<[f64; 3]> + 'a;
+
+/// Renders `cmds` in f64, the colour of triangle command `k` at weights
+/// `w` taken from `shader(k, w)` where it gives one (exact Phong: the
+/// normal interpolated and normalised at every pixel).
+pub fn render_shaded(cfg: &Config, cmds: &[Command], shader: &Shader<'_>) -> RefFrame {
+    render_full(cfg, cmds, shader, &[])
+}
+
+fn render_full(
+    cfg: &Config,
+    cmds: &[Command],
+    shader: &Shader<'_>,
+    textures: &[Texture<'_>],
+) -> RefFrame {
     let (w, h) = (cfg.width as u32, cfg.height as u32);
     let n = (w * h) as usize;
     let mut f = RefFrame {
@@ -66,7 +138,8 @@ pub fn render(cfg: &Config, cmds: &[Command]) -> RefFrame {
         wid: vec![cfg.clear.wid; n],
     };
     let screen = Rect::new(0, 0, w, h);
-    for cmd in cmds {
+    for (k, cmd) in cmds.iter().enumerate() {
+        let shade_at = |w: [f64; 3], own: [f64; 3]| shader(k, w).unwrap_or(own);
         match cmd {
             Command::WidFill { rect, wid } => {
                 if cfg.wid {
@@ -111,7 +184,41 @@ pub fn render(cfg: &Config, cmds: &[Command]) -> RefFrame {
                     );
                 }
             }
-            Command::Triangle { v, state } => triangle(&mut f, cfg, v, state),
+            Command::Triangle { v, state } => {
+                triangle(&mut f, cfg, v, state, &|w| shade_at(w, gouraud(v, w)))
+            }
+            Command::Quadratic { alpha, v, state } => {
+                let vs = v.map(|q| q.vertex().with_alpha(*alpha));
+                let own = |w| {
+                    if sliver(v) {
+                        gouraud(&vs, w)
+                    } else {
+                        quadratic(v, w)
+                    }
+                };
+                triangle(&mut f, cfg, &vs, state, &|w| shade_at(w, own(w)))
+            }
+            Command::Textured {
+                tex,
+                alpha,
+                shade,
+                v,
+                state,
+            } => {
+                let vs = v.map(|t| t.vertex(0).with_alpha(*alpha));
+                let tex = textures.get(*tex as usize);
+                let own = |w: [f64; 3]| {
+                    let l: f64 = (0..3).map(|k| w[k] * shade[k] as f64).sum();
+                    match tex {
+                        Some(t) => {
+                            let (u, v) = tex_coords(v, w);
+                            sample(t, u, v).map(|c| c * l / 255.0)
+                        }
+                        None => [l; 3],
+                    }
+                };
+                triangle(&mut f, cfg, &vs, state, &|w| shade_at(w, own(w)))
+            }
             Command::Line { line, state } => line_ref(&mut f, cfg, line, state.wid),
             Command::Edge { edge, state } => edge_ref(&mut f, cfg, edge, state.wid),
             other => unimplemented!("the reference does not model {other:?} yet"),
@@ -340,7 +447,63 @@ fn edge_ref(f: &mut RefFrame, cfg: &Config, e: &EdgeCmd, wid: u8) {
     }
 }
 
-fn triangle(f: &mut RefFrame, cfg: &Config, v: &[Vertex; 3], st: &State) {
+/// Linear interpolation of the vertex colours at weights `w`.
+fn gouraud(v: &[Vertex; 3], w: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|ch| (0..3).map(|i| w[i] * rgb(v[i].color)[ch]).sum())
+}
+
+/// Whether the core draws a quadratic triangle Gouraud-shaded (the
+/// documented rule of [`Command::Quadratic`]): `κ² (|M| + 16) > 2^45` with
+/// `κ = max over edges of (|dy| bw + |dx| bh) / area2` (sub-pixel units,
+/// `bw`, `bh` the vertices' extent plus 16) and `|M|` the largest
+/// `|2 mid - c_p - c_q|`. Exact in `i128`.
+pub fn sliver(v: &[QuadVertex; 3]) -> bool {
+    let p = v.map(|v| (v.x.to_bits() as i128, v.y.to_bits() as i128));
+    let ext = |f: fn(&(i128, i128)) -> i128| {
+        let m = p.map(|q| f(&q));
+        m.iter().max().unwrap() - m.iter().min().unwrap() + 16
+    };
+    let (bw, bh) = (ext(|q| q.0), ext(|q| q.1));
+    let area2 =
+        ((p[1].0 - p[0].0) * (p[2].1 - p[0].1) - (p[1].1 - p[0].1) * (p[2].0 - p[0].0)).abs();
+    let curv = (0..3)
+        .flat_map(|k| {
+            let (c, d, m) = (rgb(v[k].color), rgb(v[(k + 1) % 3].color), rgb(v[k].mid));
+            (0..3).map(move |i| (2.0 * m[i] - c[i] - d[i]).abs() as i128)
+        })
+        .max()
+        .unwrap_or(0);
+    (0..3).any(|k| {
+        let (a, b) = (p[k], p[(k + 1) % 3]);
+        let num = (b.1 - a.1).abs() * bw + (b.0 - a.0).abs() * bh;
+        num * num * (curv + 16) > (1 << 45) * area2 * area2
+    })
+}
+
+/// The quadratic through a [`QuadVertex`] triangle's vertex and midpoint
+/// colours at weights `w` (P2 Lagrange form), saturated to `0..=255` as
+/// the core saturates it: a bulging surface can overshoot the range
+/// inside the triangle even when all six colours are in it.
+pub fn quadratic(v: &[QuadVertex; 3], w: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|ch| {
+        (0..3)
+            .map(|k| {
+                let n = (k + 1) % 3;
+                let (c, d, m) = (rgb(v[k].color)[ch], rgb(v[n].color)[ch], rgb(v[k].mid)[ch]);
+                w[k] * c + 4.0 * w[k] * w[n] * (m - (c + d) / 2.0)
+            })
+            .sum::<f64>()
+            .clamp(0.0, 255.0)
+    })
+}
+
+fn triangle(
+    f: &mut RefFrame,
+    cfg: &Config,
+    v: &[Vertex; 3],
+    st: &State,
+    color: &dyn Fn([f64; 3]) -> [f64; 3],
+) {
     // Sub-pixel units (1/16 px): exact integers, exact in f64 too.
     let p: Vec<(i64, i64)> = v
         .iter()
@@ -385,8 +548,11 @@ fn triangle(f: &mut RefFrame, cfg: &Config, v: &[Vertex; 3], st: &State) {
                 continue;
             }
             let w = e.map(|e| e as f64 / area as f64);
-            let c: [f64; 3] =
-                std::array::from_fn(|ch| (0..3).map(|i| w[i] * rgb(vv[i].color)[ch]).sum());
+            let mut wc = [0.0; 3];
+            for (i, &k) in idx.iter().enumerate() {
+                wc[k] = w[i];
+            }
+            let c = color(wc);
             let z: f64 = (0..3).map(|i| w[i] * vv[i].z as f64).sum();
             let a: f64 = (0..3).map(|i| w[i] * vv[i].alpha as f64 / 255.0).sum();
             fragment(
@@ -595,14 +761,28 @@ impl Samples {
                     }
                 });
             }
-            Command::Triangle { v, state } => self.triangle(cfg, v, state),
+            Command::Triangle { v, state } => self.triangle(cfg, v, state, &|w| gouraud(v, w)),
+            Command::Quadratic { alpha, v, state } => {
+                let vs = v.map(|q| q.vertex().with_alpha(*alpha));
+                if sliver(v) {
+                    self.triangle(cfg, &vs, state, &|w| gouraud(&vs, w))
+                } else {
+                    self.triangle(cfg, &vs, state, &|w| quadratic(v, w))
+                }
+            }
             Command::Line { line, state } => self.line(cfg, line, state.wid),
             Command::Edge { .. } => {}
             other => unimplemented!("the ideal does not model {other:?} yet"),
         }
     }
 
-    fn triangle(&mut self, cfg: &Config, v: &[Vertex; 3], st: &State) {
+    fn triangle(
+        &mut self,
+        cfg: &Config,
+        v: &[Vertex; 3],
+        st: &State,
+        color: &dyn Fn([f64; 3]) -> [f64; 3],
+    ) {
         let p = v.map(|v| (v.x.to_num::<f64>(), v.y.to_num::<f64>()));
         let cross = |a: (f64, f64), b: (f64, f64), c: (f64, f64)| {
             (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0)
@@ -634,8 +814,11 @@ impl Samples {
             let wt = e.map(|e| e / area);
             let z: f64 = (0..3).map(|k| wt[k] * vv[k].z as f64).sum();
             if s.pass(cfg, i, z, st.wid, st.blend != Blend::Alpha) {
-                let c =
-                    std::array::from_fn(|ch| (0..3).map(|k| wt[k] * rgb(vv[k].color)[ch]).sum());
+                let mut wc = [0.0; 3];
+                for (j, &k) in idx.iter().enumerate() {
+                    wc[k] = wt[j];
+                }
+                let c = color(wc);
                 let a: f64 = (0..3).map(|k| wt[k] * vv[k].alpha as f64 / 255.0).sum();
                 s.color[i] = over(st, a, c, s.color[i]);
             }

@@ -362,17 +362,9 @@ where
 /// The frame and a boxed tile of `G` groups for `cfg`, the tile shrunk
 /// until it fits (the output does not depend on the tiling).
 #[allow(clippy::type_complexity)]
-fn frame_and_tile<
-    F: PixelFormat,
-    Z: DepthMode,
-    W: WidMode,
-    D: Dither,
-    A: AaMode,
-    P: Precision,
-    const G: usize,
->(
+fn frame_and_tile<C: TileConfig, const G: usize>(
     cfg: &Config,
-) -> Result<(Frame, Box<Tile<G, Planes<F, Z, W, D, A, P, AlphaBlending>>>), Error> {
+) -> Result<(Frame, Box<Tile<G, C>>), Error> {
     let (mut tw, mut th) = cfg.tile;
     while tw as usize * th as usize > G * 8 {
         if tw >= th {
@@ -413,7 +405,116 @@ pub fn render_as<
 where
     Rgb888: From<F::Color>,
 {
-    let (frame, mut tile) = frame_and_tile::<F, Z, W, D, A, P, G>(cfg)?;
+    render_source::<Planes<F, Z, W, D, A, P, AlphaBlending, QuadraticShading>, _, G>(
+        cfg, cmds, runs,
+    )
+}
+
+/// Perspective modes of textured triangles ([`tilerast::texture`]), by name.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Deserialize,
+    serde::Serialize,
+    clap::ValueEnum,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum TexKind {
+    /// No texturing compiled: textured triangles draw their shade.
+    #[default]
+    None,
+    /// Affine in screen space.
+    Affine,
+    /// The RE's quadratic interpolation along each span.
+    Quadratic,
+    /// A division per pixel.
+    Exact,
+}
+
+impl TexKind {
+    /// The three modes that texture.
+    pub const TEXTURED: [TexKind; 3] = [TexKind::Affine, TexKind::Quadratic, TexKind::Exact];
+    /// The name on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            TexKind::None => "none",
+            TexKind::Affine => "affine",
+            TexKind::Quadratic => "quadratic",
+            TexKind::Exact => "exact",
+        }
+    }
+}
+
+/// Renders `cmds` with `textures` (a textured command's `tex` indexes
+/// them) in perspective mode `kind`, timing `runs` renders first like
+/// [`render_timed`]. Textured scenes are built with a 16-bit Z plane, no
+/// window-ID plane, no coverage antialiasing and dither 0 or 4 (other
+/// configurations: [`Error::BadSize`]); with [`TexKind::None`] it is
+/// [`render_timed`], textures unused.
+pub fn render_textured(
+    cfg: &Config,
+    cmds: &[Command],
+    textures: &[Texture<'_>],
+    kind: TexKind,
+    runs: usize,
+) -> Result<Rendered, Error> {
+    fn by_dither<F: PixelFormat, X: TextureMode>(
+        cfg: &Config,
+        src: &WithTextures<'_, [Command]>,
+        runs: usize,
+    ) -> Result<Rendered, Error>
+    where
+        Rgb888: From<F::Color>,
+    {
+        type P<F, D, X> =
+            Planes<F, Depth16, NoWid, D, NoAa, FullPrecision, AlphaBlending, QuadraticShading, X>;
+        match cfg.dither {
+            0 | 1 => render_source::<P<F, NoDither, X>, _, SIM_GROUPS>(cfg, src, runs),
+            4 => render_source::<P<F, Bayer4, X>, _, SIM_GROUPS>(cfg, src, runs),
+            _ => Err(Error::BadSize),
+        }
+    }
+    fn by_format<X: TextureMode>(
+        cfg: &Config,
+        src: &WithTextures<'_, [Command]>,
+        runs: usize,
+    ) -> Result<Rendered, Error> {
+        match cfg.format {
+            FormatKind::Rgb888 => by_dither::<Rgb888Format, X>(cfg, src, runs),
+            FormatKind::Rgb565 => by_dither::<Rgb565Format, X>(cfg, src, runs),
+            FormatKind::Rgb444 => by_dither::<Rgb444Format, X>(cfg, src, runs),
+            FormatKind::Gray8 => by_dither::<Gray8Format, X>(cfg, src, runs),
+            FormatKind::Binary => by_dither::<BinaryFormat, X>(cfg, src, runs),
+        }
+    }
+    if kind == TexKind::None {
+        return render_timed(cfg, cmds, runs);
+    }
+    if !cfg.depth || cfg.wid || cfg.aa != AaKind::None {
+        return Err(Error::BadSize);
+    }
+    let src = WithTextures::new(cmds, textures);
+    match kind {
+        TexKind::None | TexKind::Affine => by_format::<AffineTexturing>(cfg, &src, runs),
+        TexKind::Quadratic => by_format::<QuadraticTexturing>(cfg, &src, runs),
+        TexKind::Exact => by_format::<ExactTexturing>(cfg, &src, runs),
+    }
+}
+
+/// [`render_as`] for any tile configuration and command source.
+fn render_source<C: TileConfig, S: CommandSource + ?Sized, const G: usize>(
+    cfg: &Config,
+    cmds: &S,
+    runs: usize,
+) -> Result<Rendered, Error>
+where
+    Rgb888: From<<C::Format as PixelFormat>::Color>,
+{
+    let (frame, mut tile) = frame_and_tile::<C, G>(cfg)?;
     let mut bins: Box<HostBins> = Box::default();
     let (w, h) = (cfg.width as u32, cfg.height as u32);
     let mut times: Vec<f64> = (0..runs)
@@ -440,7 +541,7 @@ where
                     let i = (y as u32 * w + x as u32) as usize;
                     let r = t.raw(x, y).expect("inside the tile");
                     raw[i] = r;
-                    let c = Rgb888::from(F::to_color(r));
+                    let c = Rgb888::from(C::Format::to_color(r));
                     image.pixels[i] = [c.r(), c.g(), c.b()];
                     depth[i] = t.depth(x, y).expect("inside the tile");
                 }
@@ -452,7 +553,7 @@ where
         image,
         raw,
         depth,
-        bits_per_pixel: Tile::<G, Planes<F, Z, W, D, A, P, AlphaBlending>>::bits_per_pixel(),
+        bits_per_pixel: Tile::<G, C>::bits_per_pixel(),
         stats,
         ns_per_pixel: times.get(times.len() / 2).copied(),
     })

@@ -297,6 +297,9 @@ pub struct Scene {
     pub notes: Vec<String>,
     /// Mesh statistics, summed.
     pub mesh: MeshStats,
+    /// Exact Phong's shading of the lit mesh triangles, by command index
+    /// ([`Scene::exact_phong`]).
+    pub phong: std::collections::HashMap<usize, mesh::PhongTri>,
     /// Commands before the antialiased edges.
     solid_commands: usize,
     /// Every edge that edge antialiasing can draw (triangles' edges, meshes'
@@ -398,6 +401,16 @@ impl Scene {
     /// [`Scene::load`] with explicit limits on file size and line length
     /// (the scene file and every OBJ and MTL it loads).
     pub fn load_with(path: impl AsRef<Path>, limits: &Limits) -> Result<Scene> {
+        Scene::load_shaded(path, limits, None)
+    }
+
+    /// [`Scene::load_with`], every mesh shaded as `shading` says when it is
+    /// given (the CLI's `--shading`), whatever its scene file says.
+    pub fn load_shaded(
+        path: impl AsRef<Path>,
+        limits: &Limits,
+        shading: Option<mesh::ShadingKind>,
+    ) -> Result<Scene> {
         let path = path.as_ref();
         let bytes = crate::obj::read_bounded(path, limits)?;
         let src = String::from_utf8(bytes).map_err(|e| {
@@ -414,8 +427,13 @@ impl Scene {
                 limit: limits.max_line,
             });
         }
-        let mut scene = Scene::parse_with(&src, path.parent().unwrap_or(Path::new(".")), limits)
-            .map_err(|e| e.in_file(path))?;
+        let mut scene = Scene::parse_inner(
+            &src,
+            path.parent().unwrap_or(Path::new(".")),
+            limits,
+            shading,
+        )
+        .map_err(|e| e.in_file(path))?;
         if let Some(stem) = path.file_stem() {
             scene.name = stem.to_string_lossy().into_owned();
         }
@@ -429,6 +447,15 @@ impl Scene {
 
     /// [`Scene::parse`] with explicit limits for the files it loads.
     pub fn parse_with(src: &str, base: &Path, limits: &Limits) -> Result<Scene> {
+        Scene::parse_inner(src, base, limits, None)
+    }
+
+    fn parse_inner(
+        src: &str,
+        base: &Path,
+        limits: &Limits,
+        shading: Option<mesh::ShadingKind>,
+    ) -> Result<Scene> {
         let lines = Lines::new(src);
         let invalid = |line: usize, message: String| Error::Invalid {
             at: Location::line(line),
@@ -505,6 +532,7 @@ impl Scene {
         let mut commands = Vec::new();
         let mut meshes = Vec::new();
         let mut mesh_stats = MeshStats::default();
+        let mut phong = std::collections::HashMap::new();
         let mut warnings = Vec::new();
         let mut edges = Vec::new();
         // Object tags for coverage antialiasing: one per triangle of the
@@ -698,6 +726,7 @@ impl Scene {
                     let mut found = Vec::new();
                     let mesh_spec = mesh::MeshSpec {
                         edge_aa: true,
+                        shading: shading.unwrap_or(spec.shading),
                         ..spec.clone()
                     };
                     let st = mesh::load(
@@ -725,6 +754,7 @@ impl Scene {
                     mesh_stats.triangles += st.triangles;
                     mesh_stats.groups += st.groups;
                     mesh_stats.dropped += st.dropped;
+                    phong.extend(st.phong);
                     continue;
                 }
             };
@@ -737,6 +767,7 @@ impl Scene {
             commands,
             notes: Vec::new(),
             mesh: mesh_stats,
+            phong,
             edges,
             meshes,
             warnings,
@@ -747,6 +778,17 @@ impl Scene {
 }
 
 impl Scene {
+    /// The scene in the f64 reference renderer with every lit mesh
+    /// triangle exact-Phong shaded: the normal interpolated across it
+    /// (screen-space weights) and normalised at every pixel, then lit as
+    /// the geometry stage lights a vertex ([`mesh::PhongTri`]). What fast
+    /// Phong approximates; there is no firmware path for it.
+    pub fn exact_phong(&self) -> crate::reference::RefFrame {
+        crate::reference::render_shaded(&self.config, &self.commands, &|k, w| {
+            self.phong.get(&k).map(|t| t.exact(w))
+        })
+    }
+
     /// Turns edge antialiasing (seed 003 eq. 8) on or off for every
     /// triangle and mesh of the scene.
     pub fn set_edge_aa(&mut self, on: bool) {

@@ -41,3 +41,22 @@ pub fn plot(
 pub fn err<E: std::fmt::Display>(e: E) -> String {
     e.to_string()
 }
+
+/// Equal-sized pictures in a grid, one row of `pics` a row.
+pub fn grid(pics: &[&[Image]]) -> Image {
+    let (w, h) = (pics[0][0].width, pics[0][0].height);
+    let cols = pics.iter().map(|r| r.len()).max().unwrap_or(0) as u32;
+    let mut out = Image::new(cols * w, pics.len() as u32 * h);
+    for (r, row) in pics.iter().enumerate() {
+        for (c, img) in row.iter().enumerate() {
+            for y in 0..h {
+                for x in 0..w {
+                    let i = (y * w + x) as usize;
+                    let o = ((r as u32 * h + y) * cols * w + c as u32 * w + x) as usize;
+                    out.pixels[o] = img.pixels[i];
+                }
+            }
+        }
+    }
+    out
+}

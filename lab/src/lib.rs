@@ -9,6 +9,10 @@
 //! - [`ruf`]: the RUF-buffer paper's Tables 1-4 on its models (seed 000);
 //! - [`tradeoff`]: the speed-against-accuracy sweep of every knob, with
 //!   Pareto fronts;
+//! - [`phong`]: fast Phong, its Taylor variant and Gouraud against exact
+//!   Phong (seed 001 §IV.2);
+//! - [`texture`]: affine, quadratic and exact perspective texturing
+//!   against the f64 mapping, by depth ratio (seed 001 §IV.3);
 //! - [`frames`]: whole frames (tiled, one tile, f64 reference) and filled
 //!   triangles against `embedded-graphics` and `tiny-skia`, timed in one run.
 //!
@@ -19,5 +23,7 @@
 pub mod aa;
 pub mod chart;
 pub mod frames;
+pub mod phong;
 pub mod ruf;
+pub mod texture;
 pub mod tradeoff;

@@ -62,6 +62,44 @@ enum Cmd {
         #[arg(short, long, default_value = "reports/frames.md")]
         output: PathBuf,
     },
+    /// Fast Phong (ours, quadratic through vertex and edge-midpoint
+    /// colours), Bishop-Weimer's Taylor variant and Gouraud against exact
+    /// Phong on spheres of every tessellation and the teapot: error against
+    /// the spread of normals, highlight offset, host cost.
+    PhongReport {
+        /// Folder of the seeds' OBJ models (the teapot).
+        #[arg(long, default_value = "assets/models")]
+        models: PathBuf,
+        /// Timed renders per method; the median is reported.
+        #[arg(long, default_value_t = 9)]
+        runs: usize,
+        /// Markdown output.
+        #[arg(short, long, default_value = "reports/phong.md")]
+        output: PathBuf,
+        /// Chart: largest error against the spread of normals.
+        #[arg(long, default_value = "reports/phong_chart.png")]
+        chart: PathBuf,
+        /// Pictures: Gouraud, fast Phong, Taylor, exact Phong.
+        #[arg(long, default_value = "reports/phong.png")]
+        image: PathBuf,
+    },
+    /// Perspective texturing — affine, quadratic (the RE's), exact
+    /// division — against the f64 mapping on a wall at depth ratios 1 to
+    /// 16: texel error and host cost.
+    TextureReport {
+        /// Timed renders per mode; the median is reported.
+        #[arg(long, default_value_t = 9)]
+        runs: usize,
+        /// Markdown output.
+        #[arg(short, long, default_value = "reports/texture.md")]
+        output: PathBuf,
+        /// Chart: largest texel error against the depth ratio.
+        #[arg(long, default_value = "reports/texture_chart.png")]
+        chart: PathBuf,
+        /// Pictures: affine, quadratic, exact at depth ratio 6.
+        #[arg(long, default_value = "reports/texture.png")]
+        image: PathBuf,
+    },
     /// Sweep every knob (colour and Z fraction bits, depth bits, sub-pixel
     /// bits, dither per format, antialiasing of solids, line mode) on a
     /// fixed set of scenes and measure error and cost: Markdown, CSV and a
@@ -103,6 +141,44 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             std::fs::write(&output, &md).map_err(|e| format!("{}: {e}", output.display()))?;
             print!("{md}");
             println!("wrote {}", output.display());
+        }
+        Cmd::PhongReport {
+            models,
+            runs,
+            output,
+            chart,
+            image,
+        } => {
+            use tilerast_lab::phong;
+            let (rows, pics) = phong::run(&models, runs.max(1))?;
+            phong::chart(&rows)?.save_png(&chart)?;
+            // The coarsest specular sphere and the specular teapot.
+            let pick: Vec<&[Image; 4]> = rows
+                .iter()
+                .zip(&pics)
+                .filter(|(r, _)| r.specular && (r.scene == "sphere 8" || r.scene == "teapot"))
+                .map(|(_, p)| p)
+                .collect();
+            if !pick.is_empty() {
+                phong::pictures(&pick).save_png(&image)?;
+            }
+            let md = phong::report(&rows, &chart, &image);
+            std::fs::write(&output, &md).map_err(|e| format!("{}: {e}", output.display()))?;
+            print!("{md}");
+        }
+        Cmd::TextureReport {
+            runs,
+            output,
+            chart,
+            image,
+        } => {
+            use tilerast_lab::texture;
+            let rows = texture::run(runs.max(1))?;
+            texture::chart(&rows)?.save_png(&chart)?;
+            texture::pictures()?.save_png(&image)?;
+            let md = texture::report(&rows, &chart, &image);
+            std::fs::write(&output, &md).map_err(|e| format!("{}: {e}", output.display()))?;
+            print!("{md}");
         }
         Cmd::AaReport {
             scenes,

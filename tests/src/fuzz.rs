@@ -406,6 +406,11 @@ fn mesh_frame<S: tilerast::geometry::Real>(
             ..State::default()
         },
         lit: p[1] & 8 == 0,
+        shading: if p[1] & 16 != 0 {
+            Shading::FastPhong
+        } else {
+            Shading::Gouraud
+        },
     };
     let model = Mat4::rotation_x(Angle::from_turn_q16(u16::from_le_bytes([p[6], p[7]])))
         .mul(&Mat4::rotation_y(Angle::from_turn_q16((p[6] as u16) << 8)));

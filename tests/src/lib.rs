@@ -150,7 +150,25 @@ pub fn random_command(rng: &mut Rng, wid: u8) -> Command {
             _ => Blend::Opaque,
         },
     };
-    match rng.range(0, 7) {
+    match rng.range(0, 8) {
+        7 => {
+            let v = rng.triangle((-400, 1900), (-400, 1500));
+            let tv = v.map(|v| TexVertex {
+                x: v.x,
+                y: v.y,
+                z: v.z,
+                u: rng.next_u64() as u16,
+                v: rng.next_u64() as u16,
+                q: rng.range(1, 65536) as u16,
+            });
+            Command::Textured {
+                tex: rng.range(0, 3) as u8,
+                alpha: rng.range(0, 256) as u8,
+                shade: [rng.byte(), rng.byte(), rng.byte()],
+                v: tv,
+                state,
+            }
+        }
         6 => {
             let v = rng.triangle((-400, 1900), (-400, 1500));
             let edge = tilerast::line::EdgeCmd::of_triangle(&v, rng.range(0, 3) as usize);
@@ -239,4 +257,45 @@ pub fn cases(default: u32) -> u32 {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(default)
+}
+
+/// One triangle of a core mesh (model space, `±16000 / 32768` of the unit
+/// cube, in the z = 0 plane) with vertex `normals` and `material`,
+/// encoded into `buf`.
+pub fn triangle_mesh<'a>(
+    buf: &'a mut [u8],
+    normals: &'a [[i16; 3]; 3],
+    material: tilerast::geometry::Material,
+) -> tilerast::geometry::Mesh<'a> {
+    use tilerast::geometry::{Group, Mesh, MeshData};
+    let data = MeshData {
+        center: [0; 3],
+        extent: 1 << 16,
+        positions: &[[-16000, -16000, 0], [16000, -16000, 0], [0, 16000, 0]],
+        normals: Some(normals),
+        colors: None,
+        groups: &[Group {
+            first_triangle: 0,
+            triangles: 1,
+            first_vertex: 0,
+            vertices: 3,
+            material,
+        }],
+        triangles: &[[0, 1, 2]],
+    };
+    let n = data.encode(buf).expect("room for one triangle");
+    Mesh::parse(&buf[..n]).expect("just encoded")
+}
+
+/// Points `scene` down -z at the origin from z = 3 (40° field of view)
+/// onto a 64x64 viewport.
+pub fn front_camera(scene: &mut tilerast::geometry::Scene<'_, f32>) {
+    use tilerast::geometry::{Angle, Mat4};
+    scene.set_camera(
+        Mat4::look_at([0.0, 0.0, 3.0], [0.0; 3], [0.0, 1.0, 0.0]).unwrap(),
+        Mat4::perspective(Angle::degrees(40), 1.0, 1.0, 5.0).unwrap(),
+    );
+    scene
+        .set_viewport(tilerast::prelude::Rect::new(0, 0, 64, 64))
+        .unwrap();
 }

@@ -10,6 +10,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command as Process;
+use tilerast::prelude::{AffineTexturing, ExactTexturing, QuadraticTexturing};
 use tilerast_fw::report::{scene_crc, Demo, SceneKind, Ssd1306, Teapot};
 use tilerast_fw::workloads::{self, FILL_CMDS, LARGE_TRIANGLE_CMDS, LINE_CMDS, TRIANGLE_CMDS};
 use tilerast_sim::Scene;
@@ -368,9 +369,10 @@ fn host_crc(name: &str, bytes: &[u8], tile: (u16, u16)) -> u32 {
 }
 
 /// The CRC of the tile the translucent workload leaves, drawn on the host.
-fn host_blend_crc() -> u32 {
-    let mut tile: tilerast::tile::Tile<128, workloads::BlendBench> = tilerast::tile::Tile::new();
-    workloads::draw(&mut tile, &workloads::LARGE_BLEND_CMDS, &mut || 0).unwrap();
+/// The host's CRC of a workload drawn in tile configuration `C`.
+fn host_bench_crc<C: tilerast::config::TileConfig>(cmds: &[tilerast::command::Command]) -> u32 {
+    let mut tile: tilerast::tile::Tile<128, C> = tilerast::tile::Tile::new();
+    workloads::draw(&mut tile, cmds, &workloads::TEXTURES, &mut || 0).unwrap();
     workloads::tile_crc(&tile)
 }
 
@@ -428,14 +430,39 @@ fn firmware_output_is_bit_identical_to_the_host() {
             r.benches.extend(b1.benches);
             r.bench_crcs.extend(b1.bench_crcs);
         }
-        // The translucent workload leaves the same bytes as on the host.
-        let crc = r.bench_crcs["large_blend_z_rgb565"];
-        assert_eq!(
-            crc,
-            host_blend_crc(),
-            "{board}: translucent workload CRC 0x{crc:08x} differs from the host's"
-        );
-        println!("{board:>10} translucent workload: CRC 0x{crc:08x} = host");
+        // The translucent, fast-Phong and textured workloads leave the same
+        // bytes as on the host.
+        for (name, host) in [
+            (
+                "large_blend_z_rgb565",
+                host_bench_crc::<workloads::BlendBench>(&workloads::LARGE_BLEND_CMDS),
+            ),
+            (
+                "large_phong_z_rgb565",
+                host_bench_crc::<workloads::QuadBench>(&workloads::LARGE_QUAD_CMDS),
+            ),
+            (
+                "large_tex_affine_z_rgb565",
+                host_bench_crc::<workloads::TexBench<AffineTexturing>>(&workloads::LARGE_TEX_CMDS),
+            ),
+            (
+                "large_tex_quadratic_z_rgb565",
+                host_bench_crc::<workloads::TexBench<QuadraticTexturing>>(
+                    &workloads::LARGE_TEX_CMDS,
+                ),
+            ),
+            (
+                "large_tex_exact_z_rgb565",
+                host_bench_crc::<workloads::TexBench<ExactTexturing>>(&workloads::LARGE_TEX_CMDS),
+            ),
+        ] {
+            let crc = r.bench_crcs[name];
+            assert_eq!(
+                crc, host,
+                "{board}: workload {name} CRC 0x{crc:08x} differs from the host's"
+            );
+            println!("{board:>10} {name}: CRC 0x{crc:08x} = host");
+        }
         // The rotating mesh, frame by frame; the other back end's vertex
         // stage, hashed.
         assert!(
@@ -578,12 +605,63 @@ fn report(reports: &[BoardResult]) -> String {
             "large_blend_z_rgb565",
             large_px,
         ),
+        (
+            "large triangles: fast Phong (quadratic, seed 001 §IV.2) + Z",
+            "large_phong_z_rgb565",
+            large_px,
+        ),
+        (
+            "large triangles: textured (16x16 RGB565, nearest, q 4:1) + Z, affine",
+            "large_tex_affine_z_rgb565",
+            large_px,
+        ),
+        (
+            "the same, perspective by quadratic interpolation along the span (seed 001 §IV.3)",
+            "large_tex_quadratic_z_rgb565",
+            large_px,
+        ),
+        (
+            "the same, perspective by division at every pixel",
+            "large_tex_exact_z_rgb565",
+            large_px,
+        ),
+        (
+            "exact Phong's per-pixel arithmetic alone (normalise + light + pack, no raster, no Z), f32",
+            "exact_phong_f32_rgb565",
+            large_px,
+        ),
+        (
+            "the same in I16F16 fixed point",
+            "exact_phong_fixed_rgb565",
+            large_px,
+        ),
     ];
     md += &table_rows(&boards, &rows);
     md += "| **ratio** alpha-blended / opaque (large, Gouraud + Z; target ≤ 1.5 on the M4) |";
     for b in &boards {
         let r =
             b.benches["large_blend_z_rgb565"] as f64 / b.benches["large_gouraud_z_rgb565"] as f64;
+        md += &format!(" {r:.2} |");
+    }
+    md += "\n";
+    md += "| **ratio** fast Phong / Gouraud (large, + Z; target ≤ 1.5 on the M4) |";
+    for b in &boards {
+        let r =
+            b.benches["large_phong_z_rgb565"] as f64 / b.benches["large_gouraud_z_rgb565"] as f64;
+        md += &format!(" {r:.2} |");
+    }
+    md += "\n";
+    md += "| **ratio** quadratic / affine texturing (target ≤ 1.3) |";
+    for b in &boards {
+        let r = b.benches["large_tex_quadratic_z_rgb565"] as f64
+            / b.benches["large_tex_affine_z_rgb565"] as f64;
+        md += &format!(" {r:.2} |");
+    }
+    md += "\n";
+    md += "| **ratio** quadratic / exact texturing (target ≤ 0.5 on the M0) |";
+    for b in &boards {
+        let r = b.benches["large_tex_quadratic_z_rgb565"] as f64
+            / b.benches["large_tex_exact_z_rgb565"] as f64;
         md += &format!(" {r:.2} |");
     }
     md += "\n";

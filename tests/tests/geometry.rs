@@ -380,36 +380,17 @@ const FX_RGB: f64 = 1.25;
 #[test]
 fn lights_add_and_specular_needs_ks() {
     let lit = |ks: Rgb, second: bool| -> Rgb {
-        let data = MeshData {
-            center: [0; 3],
-            extent: 1 << 16,
-            positions: &[[-16000, -16000, 0], [16000, -16000, 0], [0, 16000, 0]],
-            normals: Some(&[[0, 0, 32767]; 3]),
-            colors: None,
-            groups: &[Group {
-                first_triangle: 0,
-                triangles: 1,
-                first_vertex: 0,
-                vertices: 3,
-                material: Material {
-                    kd: Rgb::new(100, 100, 100),
-                    ka: Rgb::new(100, 100, 100),
-                    ks,
-                    ns: 16,
-                },
-            }],
-            triangles: &[[0, 1, 2]],
+        let material = Material {
+            kd: Rgb::new(100, 100, 100),
+            ka: Rgb::new(100, 100, 100),
+            ks,
+            ns: 16,
         };
         let mut buf = [0u8; 128];
-        let n = data.encode(&mut buf).unwrap();
-        let mesh = Mesh::parse(&buf[..n]).unwrap();
+        let mesh = tilerast_tests::triangle_mesh(&mut buf, &[[0, 0, 32767]; 3], material);
         let mut slots = [VertexSlot::EMPTY; 3];
         let mut scene: Scene<'_, f32> = Scene::new(&mut slots);
-        scene.set_camera(
-            Mat4::look_at([0.0, 0.0, 3.0], [0.0; 3], [0.0, 1.0, 0.0]).unwrap(),
-            Mat4::perspective(Angle::degrees(40), 1.0, 1.0, 5.0).unwrap(),
-        );
-        scene.set_viewport(Rect::new(0, 0, 64, 64)).unwrap();
+        tilerast_tests::front_camera(&mut scene);
         // Towards the camera: N.L = N.H = 1 at every vertex.
         let mut l = Lighting::white([0.0, 0.0, 1.0], 0.2).unwrap();
         if second {

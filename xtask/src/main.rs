@@ -10,7 +10,7 @@
 //!   checking that their output is bit-identical to the host's.
 //! - `demo`: renders `scenes/demo.toml` to `demo.png`.
 //! - `bench`: runs the criterion benchmark, writes `reports/bench.md`, then
-//!   the simulator's quality reports (`aa`, `ruf`) and the speed-against-
+//!   the simulator's quality reports (`aa`, `ruf`, `phong`, `texture`) and the speed-against-
 //!   accuracy sweep (`reports/tradeoff.*`).
 //! - `report`: runs the firmware under QEMU, writes `reports/targets.md`
 //!   (instructions per pixel on Cortex-M0/M4, flash, RAM, stack).
@@ -363,6 +363,12 @@ fn bench() -> Result<(), String> {
         "reports/aa.png",
     ])?;
     lab(&["ruf-report"])?;
+    // Fast Phong, its Taylor variant and Gouraud against exact Phong
+    // (`reports/phong.{md,png}`, `reports/phong_chart.png`).
+    lab(&["phong-report"])?;
+    // Affine, quadratic and exact perspective texturing by depth ratio
+    // (`reports/texture.{md,png}`, `reports/texture_chart.png`).
+    lab(&["texture-report"])?;
     // Every knob on both axes (`reports/tradeoff.{md,csv,png}`).
     lab(&["tradeoff"])
 }

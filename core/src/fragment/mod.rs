@@ -109,6 +109,36 @@ impl BlendMode for AlphaBlending {
     const ALPHA: bool = true;
 }
 
+/// Whether a tile's triangle loops step quadratic colours
+/// ([`crate::command::Command::Quadratic`], the RE's fast Phong), chosen by
+/// type like [`BlendMode`]: a configuration without it compiles no
+/// quadratic setup or stepping and draws those triangles Gouraud-shaded
+/// from their vertex colours.
+///
+/// ```
+/// use tilerast::prelude::*;
+/// type Lit = Planes<Rgb565Format, Depth16, NoWid, Bayer4, NoAa, FullPrecision, NoBlending, QuadraticShading>;
+/// assert!(<Lit as TileConfig>::Shading::QUADRATIC);
+/// assert!(!<St7789Config as TileConfig>::Shading::QUADRATIC);
+/// assert_eq!(Tile::<8, Lit>::bits_per_pixel(), Tile::<8, St7789Config>::bits_per_pixel());
+/// ```
+pub trait ShadingMode: 'static {
+    /// Whether quadratic triangles are stepped quadratically.
+    const QUADRATIC: bool;
+}
+/// Gouraud only: quadratic triangles take their vertex colours (the default).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct GouraudShading;
+/// Quadratic (fast Phong) triangles compiled in.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct QuadraticShading;
+impl ShadingMode for GouraudShading {
+    const QUADRATIC: bool = false;
+}
+impl ShadingMode for QuadraticShading {
+    const QUADRATIC: bool = true;
+}
+
 /// Depth- and window-ID-plane storage: the tile's internals.
 /// Public only with the `unstable` feature (the research crate and the
 /// tests use them); no stability promise.

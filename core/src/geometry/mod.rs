@@ -75,7 +75,7 @@ pub use math::{cross, dot, normalize, sub, Mat4, Vec3};
 pub use mesh::{Group, Material, Mesh, MeshData, CUBE_BYTES};
 pub use real::{Angle, Fx, Real};
 
-use crate::command::{Command, State, Vertex};
+use crate::command::{Command, QuadVertex, State, Vertex};
 use crate::error::Error;
 use crate::format::Rgb;
 use crate::frame::CommandSource;
@@ -150,6 +150,32 @@ pub enum Cull {
     Front,
 }
 
+/// How a draw's lit triangles are shaded between their vertices.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Shading {
+    /// Colours lit at the vertices, interpolated linearly (one addition
+    /// per channel and pixel).
+    #[default]
+    Gouraud,
+    /// The RE's fast Phong (seed 001 §IV.2): each triangle also lights the
+    /// midpoints of its edges with the normalised mean of the two vertex
+    /// normals — exact Phong at six points — and the raster stage steps the
+    /// quadratic through the six colours ([`Command::Quadratic`]: two
+    /// additions per channel and pixel). Needs normals and a tile
+    /// configuration with [`QuadraticShading`](crate::fragment::QuadraticShading);
+    /// triangles the geometry stage clips, and meshes without normals, stay
+    /// Gouraud.
+    ///
+    /// **Domain.** The quadratic follows exact Phong closely while a
+    /// triangle's normals spread little: within 2 LSB (diffuse) up to
+    /// about the spread `reports/phong.md` measures on tessellated spheres;
+    /// past it the error grows but stays below Gouraud's. A triangle with
+    /// two vertex normals 90° or more apart (a crease: the midpoint normal
+    /// means nothing) is drawn Gouraud-shaded.
+    FastPhong,
+}
+
 /// How one draw is rendered.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -165,6 +191,8 @@ pub struct DrawOptions {
     /// Light the vertices (default); otherwise each vertex takes its
     /// diffuse colour.
     pub lit: bool,
+    /// Gouraud (default) or fast Phong.
+    pub shading: Shading,
 }
 
 impl Default for DrawOptions {
@@ -174,6 +202,7 @@ impl Default for DrawOptions {
             cull: Cull::Back,
             clockwise: false,
             lit: true,
+            shading: Shading::Gouraud,
         }
     }
 }
@@ -335,7 +364,7 @@ struct ModelLight<S> {
     color: Vec3<S>,
 }
 
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 struct Draw<'m, S> {
     mesh: Mesh<'m>,
     /// Projection * view * model * dequantisation.
@@ -345,6 +374,8 @@ struct Draw<'m, S> {
     /// First triangle key (key = triangle << 3 | piece).
     tri_base: u32,
     opts: DrawOptions,
+    /// The lights in model space, kept for fast Phong's midpoints.
+    lights: heapless::Vec<ModelLight<S>, MAX_LIGHTS>,
 }
 
 /// A frame's 3D scene: camera, viewport, lights, up to `D` draws of
@@ -556,7 +587,14 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
                 let kd = mesh.color(i).unwrap_or(m.kd);
                 let ka = if mesh.color(i).is_some() { kd } else { m.ka };
                 slot.rgb = match mesh.normal(i).filter(|_| opts.lit) {
-                    Some(n) => shade(n, kd, ka, &m, &lights, &self.lighting.ambient),
+                    Some(n) => shade_vec(
+                        n.map(|c| S::from_q(c as i64, 15)),
+                        kd,
+                        ka,
+                        &m,
+                        &lights,
+                        &self.lighting.ambient,
+                    ),
                     None => [kd.r, kd.g, kd.b],
                 };
             }
@@ -574,6 +612,7 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
             first: first as u32,
             tri_base,
             opts: *opts,
+            lights,
         });
         self.stats.add(&stats);
         Ok(stats)
@@ -614,9 +653,14 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
         }
         if or == 0 {
             if want(0) && faces(area(&v), d.opts.cull, sign) {
-                let cmd = Command::Triangle {
-                    v: v.map(|c| c.vertex()),
-                    state,
+                let vs = v.map(|c| c.vertex());
+                let cmd = match self.midpoints(d, t, &idx) {
+                    Some(mid) => Command::Quadratic {
+                        alpha: 255,
+                        v: [0, 1, 2].map(|k| QuadVertex::new(vs[k], mid[k])),
+                        state,
+                    },
+                    None => Command::Triangle { v: vs, state },
                 };
                 f(key, &cmd);
             }
@@ -665,6 +709,61 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
     }
 }
 
+impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
+    /// Fast Phong's edge-midpoint colours of triangle `t` (vertices `idx`):
+    /// each lit with the normalised sum of its edge's two vertex normals
+    /// and the mean of their colours, exactly as a vertex is lit. `None`
+    /// when the draw is Gouraud, unlit or has no normals, or two normals of
+    /// an edge are 90° or more apart.
+    fn midpoints(&self, d: &Draw<'a, S>, t: u16, idx: &[u16; 3]) -> Option<[Rgb; 3]> {
+        if d.opts.shading != Shading::FastPhong || !d.opts.lit {
+            return None;
+        }
+        let mesh = &d.mesh;
+        let m = mesh.group(group_of(mesh, t)).material;
+        let n = [
+            mesh.normal(idx[0])?,
+            mesh.normal(idx[1])?,
+            mesh.normal(idx[2])?,
+        ];
+        // Normals 90° or more apart along an edge are a crease, not a
+        // smooth surface: no midpoint normal to speak of.
+        for (a, b) in [(0, 1), (1, 2), (2, 0)] {
+            let dot: i32 = (0..3).map(|c| n[a][c] as i32 * n[b][c] as i32).sum();
+            if dot <= 0 {
+                return None;
+            }
+        }
+        let mut out = [Rgb::new(0, 0, 0); 3];
+        for (k, o) in out.iter_mut().enumerate() {
+            let (a, b) = (k, (k + 1) % 3);
+            let sum = core::array::from_fn(|c| S::from_q(n[a][c] as i64 + n[b][c] as i64, 15));
+            let nm = normalize(sum).ok()?;
+            let mean = |x: Rgb, y: Rgb| {
+                let h = |p: u8, q: u8| (p as u16 + q as u16).div_ceil(2) as u8;
+                Rgb::new(h(x.r, y.r), h(x.g, y.g), h(x.b, y.b))
+            };
+            let (kd, ka) = match (mesh.color(idx[a]), mesh.color(idx[b])) {
+                (Some(x), Some(y)) => (mean(x, y), mean(x, y)),
+                _ => (m.kd, m.ka),
+            };
+            let c = shade_vec(nm, kd, ka, &m, &d.lights, &self.lighting.ambient);
+            *o = Rgb::new(c[0], c[1], c[2]);
+        }
+        Some(out)
+    }
+}
+
+/// The group triangle `t` belongs to.
+fn group_of(mesh: &Mesh<'_>, t: u16) -> u16 {
+    (0..mesh.groups())
+        .find(|&g| {
+            let grp = mesh.group(g);
+            t < grp.first_triangle + grp.triangles
+        })
+        .unwrap_or(0)
+}
+
 /// The clip-space position of vertex `i`.
 #[inline]
 fn clip_position<S: Real>(mesh: &Mesh<'_>, mvp: &Mat4<S>, i: u16) -> [S; 4] {
@@ -705,12 +804,7 @@ fn tagged(mesh: &Mesh<'_>, state: &State, t: u16) -> State {
     if state.tag == 0 || mesh.groups() == 1 {
         return *state;
     }
-    let g = (0..mesh.groups())
-        .find(|&g| {
-            let grp = mesh.group(g);
-            t < grp.first_triangle + grp.triangles
-        })
-        .unwrap_or(0);
+    let g = group_of(mesh, t);
     State {
         tag: state.tag.wrapping_add(g),
         ..*state
@@ -754,17 +848,17 @@ fn model_lights<S: Real>(
     out
 }
 
-/// Ambient + Lambert + Blinn-Phong of one vertex, 0..255 per channel.
+/// Ambient + Lambert + Blinn-Phong at a unit normal (back end numbers),
+/// 0..255 per channel: a vertex, or a fast-Phong edge midpoint.
 #[inline]
-fn shade<S: Real>(
-    n: [i16; 3],
+fn shade_vec<S: Real>(
+    n: Vec3<S>,
     kd: Rgb,
     ka: Rgb,
     m: &Material,
     lights: &[ModelLight<S>],
     ambient: &Vec3<S>,
 ) -> [u8; 3] {
-    let n = n.map(|c| S::from_q(c as i64, 15));
     let (mut diff, mut spec) = ([S::ZERO; 3], [S::ZERO; 3]);
     let specular = m.ks != Rgb::new(0, 0, 0);
     for l in lights {

@@ -7,6 +7,8 @@
 //! - `span`: the span DDA values every primitive ends in (seed 001 §II.1);
 //! - [`line`]: Bresenham and two-point (Wu) lines, antialiased solid edges
 //!   (seed 003 eqs. 4, 7, 8);
+//! - `texmap`: texture coordinates along a span, affine, quadratic (the
+//!   RE's) or divided per pixel (seed 001 §IV.3);
 //! - [`coverage`]: sample patterns, coverage masks and the RUF buffer
 //!   (seed 000 eqs. 1-3, 6, 7).
 //!
@@ -16,4 +18,5 @@
 pub mod coverage;
 pub mod line;
 pub(crate) mod span;
+pub(crate) mod texmap;
 pub(crate) mod traverse;

@@ -107,6 +107,9 @@ pub(crate) struct Row {
     pub x0: i64,
     /// One past the last.
     pub x1: i64,
+    /// One past the row's last covered pixel, unclipped (`xe >= x1`):
+    /// with `xr`, the whole span, whatever the tile.
+    pub xe: i64,
     /// Unbiased value of edge 1 at `(xr, py)`.
     pub e1: i64,
     /// Unbiased value of edge 2 at `(xr, py)`.
@@ -185,6 +188,7 @@ impl<T: EdgeInt> Iterator for Spans<'_, T> {
                     xr: self.ax + lo.to_i64(),
                     x0: self.ax + x0.to_i64(),
                     x1: self.ax + x1.to_i64(),
+                    xe: self.ax + hi.to_i64(),
                     e1: at(&self.e[1]),
                     e2: at(&self.e[2]),
                 });

@@ -10,22 +10,37 @@
 //! coverage plane ([`crate::raster::coverage`]) until the tile is resolved.
 
 use super::{Phase, Tile};
-use crate::command::{Blend, Command, SpanCmd, State};
+use crate::command::{Blend, Command, QuadVertex, SpanCmd, State};
 use crate::config::TileConfig;
 use crate::error::Error;
 use crate::format::{ColorPlane, Lanes, PixelFormat, Rgb};
 use crate::fragment::dither::{round_bias, Dither};
-use crate::fragment::{BlendMode, DepthMode, DepthPlane, WidMode, WidPlane};
+use crate::fragment::{BlendMode, DepthMode, DepthPlane, ShadingMode, WidMode, WidPlane};
 use crate::geom::Rect;
 use crate::numeric::{Precision, COLOR_FRAC, SUBPIXEL as SUBPIXEL_I64, Z_FRAC};
 use crate::raster::coverage::{AaMode, AaPlane};
 use crate::raster::span::{quantize_color, quantize_z, SpanStart};
+use crate::raster::texmap::{self, TexSetup};
 use crate::raster::traverse::{Row, Spans};
-use crate::setup::{alpha_weight, fits_i32, EdgeInt, TriangleSetup};
+use crate::setup::{alpha_weight, fits_i32, EdgeInt, QuadPlane, TriangleSetup};
+use crate::texture::{
+    TexVertex, Texture, TextureMode, PERSPECTIVE_AFFINE, PERSPECTIVE_EXACT, PERSPECTIVE_NONE,
+    PERSPECTIVE_QUADRATIC,
+};
 
-impl<const N: usize, C, F, Z, W, D, A, P, B> Tile<N, C>
+impl<const N: usize, C, F, Z, W, D, A, P, B, S, X> Tile<N, C>
 where
-    C: TileConfig<Format = F, Depth = Z, Wid = W, Dither = D, Aa = A, Precision = P, Blending = B>,
+    C: TileConfig<
+        Format = F,
+        Depth = Z,
+        Wid = W,
+        Dither = D,
+        Aa = A,
+        Precision = P,
+        Blending = B,
+        Shading = S,
+        Texturing = X,
+    >,
     F: PixelFormat,
     Z: DepthMode,
     W: WidMode,
@@ -33,11 +48,21 @@ where
     A: AaMode,
     P: Precision,
     B: BlendMode,
+    S: ShadingMode,
+    X: TextureMode,
 {
-    /// Validates and draws one command, clipped to the tile.
+    /// Validates and draws one command, clipped to the tile (a textured
+    /// triangle without its texture: [`Self::draw_textured`]).
     pub fn draw(&mut self, cmd: &Command) -> Result<(), Error> {
+        self.draw_textured(cmd, &[])
+    }
+
+    /// Validates and draws one command, clipped to the tile, a textured
+    /// triangle with its texture from `textures`
+    /// ([`Command::Textured`]).
+    pub fn draw_textured(&mut self, cmd: &Command, textures: &[Texture<'_>]) -> Result<(), Error> {
         cmd.validate()?;
-        self.draw_valid(cmd);
+        self.draw_valid(cmd, textures);
         Ok(())
     }
 
@@ -65,20 +90,45 @@ where
         }
     }
 
-    pub(crate) fn draw_valid(&mut self, cmd: &Command) {
+    pub(crate) fn draw_valid(&mut self, cmd: &Command, textures: &[Texture<'_>]) {
         if A::SAMPLES > 0 {
             // Masked and translucent solids go over the resolved pixels.
             let late = match cmd {
-                Command::Triangle { state, .. } | Command::Fill { state, .. } => {
+                Command::Triangle { state, .. }
+                | Command::Quadratic { state, .. }
+                | Command::Textured { state, .. }
+                | Command::Fill { state, .. } => {
                     state.plane_mask & F::MASK_ALL != F::MASK_ALL
                         || (B::ALPHA && state.blend.translucent())
                 }
                 _ => false,
             };
             match (self.resolved, cmd) {
-                (false, Command::Triangle { .. } | Command::Fill { .. }) if late => return,
-                (true, Command::Triangle { .. } | Command::Fill { .. }) if late => {}
+                (
+                    false,
+                    Command::Triangle { .. }
+                    | Command::Quadratic { .. }
+                    | Command::Textured { .. }
+                    | Command::Fill { .. },
+                ) if late => return,
+                (
+                    true,
+                    Command::Triangle { .. }
+                    | Command::Quadratic { .. }
+                    | Command::Textured { .. }
+                    | Command::Fill { .. },
+                ) if late => {}
                 (false, Command::Triangle { v, state }) => return self.triangle_aa(v, state),
+                // Coverage samples hold one colour per fragment: Gouraud.
+                (false, Command::Quadratic { v, state, .. }) => {
+                    return self.triangle_aa(&v.map(|q| q.vertex()), state)
+                }
+                (
+                    false,
+                    Command::Textured {
+                        v, shade, state, ..
+                    },
+                ) => return self.triangle_aa(&Command::textured_vertices(v, shade), state),
                 (
                     false,
                     Command::Fill {
@@ -111,14 +161,21 @@ where
             }
         }
         match cmd {
-            Command::Triangle { v, state } => {
-                let alpha = B::ALPHA && state.blend.translucent();
-                if fits_i32(v) {
-                    if let Some(t) = TriangleSetup::<_, i32>::new::<F>(v, alpha) {
-                        self.triangle(&t, state);
+            Command::Triangle { v, state } => self.gouraud(v, state),
+            Command::Quadratic { alpha, v, state } => self.quadratic(v, *alpha, state),
+            Command::Textured {
+                tex,
+                alpha,
+                shade,
+                v,
+                state,
+            } => {
+                let vs = Command::textured_vertices(v, shade).map(|v| v.with_alpha(*alpha));
+                match textures.get(*tex as usize) {
+                    Some(texture) if X::MODE != PERSPECTIVE_NONE => {
+                        self.textured(&vs, v, shade, texture, state)
                     }
-                } else if let Some(t) = TriangleSetup::<_, i64>::new::<F>(v, alpha) {
-                    self.triangle(&t, state);
+                    _ => self.gouraud(&vs, state),
                 }
             }
             Command::Span { span, state } => self.span_cmd(span, state),
@@ -158,23 +215,205 @@ where
         }
     }
 
+    /// A Gouraud-shaded triangle, opaque or blended by its state (one copy
+    /// for plain and untextured triangles: the M0's flash).
+    fn gouraud(&mut self, v: &[crate::command::Vertex; 3], st: &State) {
+        let alpha = B::ALPHA && st.blend.translucent();
+        if fits_i32(v) {
+            if let Some(t) = TriangleSetup::<_, i32>::new::<F>(v, alpha) {
+                self.triangle(&t, st);
+            }
+        } else if let Some(t) = TriangleSetup::<_, i64>::new::<F>(v, alpha) {
+            self.triangle(&t, st);
+        }
+    }
+
+    /// A textured triangle ([`crate::texture`]): set up like a Gouraud
+    /// one (edges, Z, blend weight), plus its texture coordinates.
+    fn textured(
+        &mut self,
+        v: &[crate::command::Vertex; 3],
+        tv: &[TexVertex; 3],
+        shade: &[u8; 3],
+        tex: &Texture<'_>,
+        st: &State,
+    ) {
+        // The 64-bit edges only: a texel costs far more than a row's edge
+        // step, and one copy of the span loops per mode fits the M0's
+        // flash beside the other workloads.
+        let blend = B::ALPHA && st.blend.translucent();
+        if let Some(t) = TriangleSetup::<_, i64>::new::<F>(v, blend) {
+            self.textured_setup(&t, &TexSetup::new(tv, shade, &t), tex, st);
+        }
+    }
+
+    #[inline(always)]
+    fn textured_setup<T: EdgeInt>(
+        &mut self,
+        t: &TriangleSetup<F::Lanes, T>,
+        ts: &TexSetup,
+        tex: &Texture<'_>,
+        st: &State,
+    ) {
+        let blend = B::ALPHA && st.blend.translucent();
+        match (X::MODE, blend) {
+            (PERSPECTIVE_AFFINE, false) => {
+                self.textured_rows::<T, PERSPECTIVE_AFFINE, false>(t, ts, tex, st)
+            }
+            (PERSPECTIVE_AFFINE, true) => {
+                self.textured_rows::<T, PERSPECTIVE_AFFINE, true>(t, ts, tex, st)
+            }
+            (PERSPECTIVE_QUADRATIC, false) => {
+                self.textured_rows::<T, PERSPECTIVE_QUADRATIC, false>(t, ts, tex, st)
+            }
+            (PERSPECTIVE_QUADRATIC, true) => {
+                self.textured_rows::<T, PERSPECTIVE_QUADRATIC, true>(t, ts, tex, st)
+            }
+            (_, false) => self.textured_rows::<T, PERSPECTIVE_EXACT, false>(t, ts, tex, st),
+            (_, true) => self.textured_rows::<T, PERSPECTIVE_EXACT, true>(t, ts, tex, st),
+        }
+    }
+
+    /// The rows of a textured triangle: per pixel the window-ID and Z
+    /// tests, the texel at the span's coordinates ([`crate::raster::texmap`])
+    /// times the shade, then blend (`BLEND`) and the one store path.
+    #[inline(always)]
+    fn textured_rows<T: EdgeInt, const MODE: u8, const BLEND: bool>(
+        &mut self,
+        t: &TriangleSetup<F::Lanes, T>,
+        ts: &TexSetup,
+        tex: &Texture<'_>,
+        st: &State,
+    ) {
+        let ga = t.alpha[1];
+        let zwrite = !BLEND || st.blend == Blend::AlphaZWrite;
+        let mask = st.plane_mask & F::MASK_ALL;
+        let bias = round_bias::<D>();
+        self.each_row::<T, BLEND>(t, |tile, row, start, a| {
+            let r = tile.area;
+            let first = ((row.py - r.y as i64) * r.w as i64 + (row.x0 - r.x as i64)) as usize;
+            let mut sp = ts.span::<MODE>(row, row.x0);
+            let (mut z, mut a) = (start.z + (1 << (Z_FRAC - 1)), a.wrapping_add(1 << 15));
+            for (idx, x) in (first..).zip(row.x0..row.x1) {
+                let pass = tile.wid.pass(idx, st.wid)
+                    && if zwrite {
+                        tile.depth.test_and_set(idx, z)
+                    } else {
+                        tile.depth.test(idx, z)
+                    };
+                if pass {
+                    let (u, v) = texmap::coords::<MODE>(ts, &sp);
+                    let c = tex.sample(u, v);
+                    // Texel (8-bit) times shade (8.8) to 8.16: x 257/256 ~ /255.
+                    let l = (sp.l.max(0) >> 8) as i64;
+                    let m = |c: u8| (c as i64 * l * 257) >> 8;
+                    let src = F::lanes_from_rgb([m(c.r), m(c.g), m(c.b)]);
+                    let out = if BLEND {
+                        let old = F::unpack_masked(tile.color.get(idx), mask);
+                        mix(src, old, a >> 16, bias)
+                    } else {
+                        src.map(|v| v + bias)
+                    };
+                    if mask == F::MASK_ALL {
+                        tile.store::<false>(idx, x as u32, row.py as u32, out, mask);
+                    } else {
+                        tile.store::<true>(idx, x as u32, row.py as u32, out, mask);
+                    }
+                }
+                texmap::step::<MODE>(ts, &mut sp);
+                z += start.dz;
+                a = a.wrapping_add(ga);
+            }
+        });
+    }
+
     /// Draws a set-up triangle, opaque or blended by its state.
     #[inline(always)]
     fn triangle<T: EdgeInt>(&mut self, t: &TriangleSetup<F::Lanes, T>, st: &State) {
+        self.triangle_shaded::<T, false>(t, &QuadPlane::unused(), st);
+    }
+
+    /// A quadratic (fast Phong) triangle: its quadratic colour planes when
+    /// the configuration compiles them ([`ShadingMode`]) and the triangle is
+    /// not a sliver ([`QuadPlane::new`]); otherwise Gouraud from the vertex
+    /// colours. A translucent one has one opacity.
+    fn quadratic(&mut self, q: &[QuadVertex; 3], alpha: u8, st: &State) {
+        let v = q.map(|q| q.vertex().with_alpha(alpha));
+        let blend = B::ALPHA && st.blend.translucent();
+        if fits_i32(&v) {
+            if let Some(t) = TriangleSetup::<_, i32>::new::<F>(&v, blend) {
+                self.quadratic_setup(q, &t, st);
+            }
+        } else if let Some(t) = TriangleSetup::<_, i64>::new::<F>(&v, blend) {
+            self.quadratic_setup(q, &t, st);
+        }
+    }
+
+    #[inline(always)]
+    fn quadratic_setup<T: EdgeInt>(
+        &mut self,
+        q: &[QuadVertex; 3],
+        t: &TriangleSetup<F::Lanes, T>,
+        st: &State,
+    ) {
+        match S::QUADRATIC.then(|| QuadPlane::new::<F, T>(q, t)) {
+            Some(Some(p)) => self.triangle_shaded::<T, true>(t, &p, st),
+            _ => self.triangle(t, st),
+        }
+    }
+
+    /// A set-up triangle, opaque or blended by its state, Gouraud or (with
+    /// `QUAD`) quadratic.
+    #[inline(always)]
+    fn triangle_shaded<T: EdgeInt, const QUAD: bool>(
+        &mut self,
+        t: &TriangleSetup<F::Lanes, T>,
+        q: &QuadPlane<F::Lanes>,
+        st: &State,
+    ) {
         if B::ALPHA && st.blend.translucent() {
-            self.triangle_rows::<T, true>(t, st);
+            self.triangle_rows::<T, true, QUAD>(t, q, st);
         } else {
-            self.triangle_rows::<T, false>(t, st);
+            self.triangle_rows::<T, false, QUAD>(t, q, st);
         }
     }
 
     /// The rows of a triangle, each one span; `BLEND`: through
-    /// [`Self::blend_span`] with the triangle's blend-weight plane.
+    /// [`Self::blend_span`] with the triangle's blend-weight plane; `QUAD`:
+    /// colour from the quadratic planes `q` instead of the linear ones.
     #[inline(always)]
-    fn triangle_rows<T: EdgeInt, const BLEND: bool>(
+    fn triangle_rows<T: EdgeInt, const BLEND: bool, const QUAD: bool>(
         &mut self,
         t: &TriangleSetup<F::Lanes, T>,
+        q: &QuadPlane<F::Lanes>,
         st: &State,
+    ) {
+        let ga = t.alpha[1];
+        self.each_row::<T, BLEND>(t, |tile, row, start, a| {
+            let (x0, py, n) = (row.x0, row.py, row.x1 - row.x0);
+            let start = if QUAD {
+                let (c, dc) = q.at(x0, py);
+                SpanStart { c, dc, ..start }
+            } else {
+                start
+            };
+            if BLEND {
+                tile.blend_span::<true, QUAD>(x0, py, n, start, q.ddc, (a, ga), st);
+            } else {
+                tile.span_with::<QUAD>(x0, py, n, start, q.ddc, st);
+            }
+        });
+    }
+
+    /// Calls `f(tile, row, start, a)` for each row of a set-up triangle
+    /// inside the tile: the DDA start (colour, Z) and, with `BLEND`, the
+    /// blend weight at the row's first pixel in the tile — the same values
+    /// whichever tile asks.
+    #[inline(always)]
+    fn each_row<T: EdgeInt, const BLEND: bool>(
+        &mut self,
+        t: &TriangleSetup<F::Lanes, T>,
+        mut f: impl FnMut(&mut Self, &Row, SpanStart<F::Lanes>, i32),
     ) {
         let area = self.area;
         // Small triangles: the anchored planes, rounded once to the DDA's
@@ -191,15 +430,10 @@ where
         let (gcy, gzy) = (quantize_color::<P, _>(t.gcy), quantize_z::<P>(t.gzy));
         let (ax, ay) = (t.bounds.x as i64, t.bounds.y as i64);
         let [a_anchor, ga, gay] = t.alpha;
-        for Row {
-            py,
-            xr,
-            x0,
-            x1,
-            e1,
-            e2,
-        } in Spans::new(&t.e, &t.bounds, &area)
-        {
+        for row in Spans::new(&t.e, &t.bounds, &area) {
+            let Row {
+                py, xr, x0, e1, e2, ..
+            } = row;
             let (start, a) = if T::EXACT_ROWS {
                 // Restart from the plane equation at xr, then advance to x0
                 // by multiplication: exactly the values x0 - xr DDA steps
@@ -236,11 +470,7 @@ where
                 };
                 (s.advanced(x0 - ax), a)
             };
-            if BLEND {
-                self.blend_span::<true>(x0, py, x1 - x0, start, (a, ga), st);
-            } else {
-                self.span(x0, py, x1 - x0, start, st);
-            }
+            f(self, &row, start, a);
         }
     }
 
@@ -361,12 +591,14 @@ where
     /// window-ID test and a Z test that writes only for
     /// [`Blend::AlphaZWrite`]. Fills pass `ZTEST = false`: they have no depth.
     #[inline(always)]
-    fn blend_span<const ZTEST: bool>(
+    #[allow(clippy::too_many_arguments)]
+    fn blend_span<const ZTEST: bool, const QUAD: bool>(
         &mut self,
         x: i64,
         y: i64,
         n: i64,
         s: SpanStart<F::Lanes>,
+        ddc: F::Lanes,
         (a, da): (i32, i32),
         st: &State,
     ) {
@@ -380,10 +612,17 @@ where
         let a = (a.wrapping_add(1 << 15), da);
         let mask = st.plane_mask & F::MASK_ALL;
         let (xs, ys, n) = (x as u32, y as u32, n as usize);
-        match (ZTEST, st.blend == Blend::AlphaZWrite) {
-            (false, _) => self.span_masked::<BLEND_NO_Z>(idx, xs, ys, n, s, a, st.wid, mask),
-            (true, false) => self.span_masked::<BLEND>(idx, xs, ys, n, s, a, st.wid, mask),
-            (true, true) => self.span_masked::<BLEND_Z_WRITE>(idx, xs, ys, n, s, a, st.wid, mask),
+        let (w, q) = (st.wid, (s, ddc));
+        match (ZTEST, st.blend == Blend::AlphaZWrite, QUAD) {
+            (false, _, _) => self.span_masked::<BLEND_NO_Z>(idx, xs, ys, n, q, a, w, mask),
+            (true, false, false) => self.span_masked::<BLEND>(idx, xs, ys, n, q, a, w, mask),
+            (true, true, false) => self.span_masked::<BLEND_Z_WRITE>(idx, xs, ys, n, q, a, w, mask),
+            (true, false, true) => {
+                self.span_masked::<{ BLEND | QUAD_STEP }>(idx, xs, ys, n, q, a, w, mask)
+            }
+            (true, true, true) => {
+                self.span_masked::<{ BLEND_Z_WRITE | QUAD_STEP }>(idx, xs, ys, n, q, a, w, mask)
+            }
         }
     }
 
@@ -396,7 +635,7 @@ where
         x: u32,
         y: u32,
         n: usize,
-        s: SpanStart<F::Lanes>,
+        s: (SpanStart<F::Lanes>, F::Lanes),
         a: (i32, i32),
         wid: u8,
         mask: u32,
@@ -413,7 +652,9 @@ where
     /// replaces the pixel) or a translucent mode ([`BLEND_NO_Z`],
     /// [`BLEND`], [`BLEND_Z_WRITE`]: the fragment blends over the pixel
     /// with the weight `a`, stepped by `da`, which opaque spans leave
-    /// unused and the compiler removes).
+    /// unused and the compiler removes). With [`QUAD_STEP`] in `MODE` the
+    /// colour steps by second-order forward differences: `dc` itself grows
+    /// by `ddc` every pixel (quadratic triangles, [`QuadPlane`]).
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn span_loop<const MODE: u8, const MASKED: bool>(
@@ -422,23 +663,24 @@ where
         mut x: u32,
         y: u32,
         n: usize,
-        s: SpanStart<F::Lanes>,
+        (s, ddc): (SpanStart<F::Lanes>, F::Lanes),
         (mut a, da): (i32, i32),
         wid: u8,
         mask: u32,
     ) {
         let bias = round_bias::<D>();
-        let (mut c, mut z) = (s.c, s.z);
+        let (mut c, mut dc, mut z) = (s.c, s.dc, s.z);
         let end = idx + n;
+        let blend = MODE & !QUAD_STEP;
         loop {
             let pass = self.wid.pass(idx, wid)
-                && match MODE {
+                && match blend {
                     BLEND_NO_Z => true,
                     BLEND => self.depth.test(idx, z),
                     _ => self.depth.test_and_set(idx, z),
                 };
             if pass {
-                let v = if MODE == OPAQUE {
+                let v = if blend == OPAQUE {
                     c
                 } else {
                     let raw = self.color.get(idx);
@@ -456,9 +698,12 @@ where
                 break;
             }
             x = x.wrapping_add(1);
-            c = c.zip(s.dc, |v, d| v + d);
+            c = c.zip(dc, |v, d| v.wrapping_add(d));
+            if MODE & QUAD_STEP != 0 {
+                dc = dc.zip(ddc, |d, dd| d.wrapping_add(dd));
+            }
             z += s.dz;
-            if MODE != OPAQUE {
+            if blend != OPAQUE {
                 a = a.wrapping_add(da);
             }
         }
@@ -478,7 +723,7 @@ where
             };
             for y in r.y as i64..r.y1() {
                 let a = (alpha_weight(alpha), 0);
-                self.blend_span::<false>(r.x as i64, y, r.w as i64, s, a, st);
+                self.blend_span::<false, false>(r.x as i64, y, r.w as i64, s, s.dc, a, st);
             }
             return;
         }
@@ -520,6 +765,21 @@ where
     /// clipped to this tile.
     #[inline(always)]
     pub(crate) fn span(&mut self, x: i64, y: i64, n: i64, s: SpanStart<F::Lanes>, st: &State) {
+        self.span_with::<false>(x, y, n, s, s.dc, st);
+    }
+
+    /// [`Self::span`], with `QUAD`: the colour step `s.dc` grows by `ddc`
+    /// every pixel.
+    #[inline(always)]
+    fn span_with<const QUAD: bool>(
+        &mut self,
+        x: i64,
+        y: i64,
+        n: i64,
+        s: SpanStart<F::Lanes>,
+        ddc: F::Lanes,
+        st: &State,
+    ) {
         let a = self.area;
         let idx = ((y - a.y as i64) * a.w as i64 + (x - a.x as i64)) as usize;
         let bias = round_bias::<D>();
@@ -532,7 +792,21 @@ where
         // Screen addresses are non-negative inside a tile; only their low
         // bits reach the dither.
         let (xs, ys) = (x as u32, y as u32);
-        self.span_masked::<OPAQUE>(idx, xs, ys, n as usize, s, (0, 0), st.wid, mask);
+        let n = n as usize;
+        if QUAD {
+            self.span_masked::<{ OPAQUE | QUAD_STEP }>(
+                idx,
+                xs,
+                ys,
+                n,
+                (s, ddc),
+                (0, 0),
+                st.wid,
+                mask,
+            );
+        } else {
+            self.span_masked::<OPAQUE>(idx, xs, ys, n, (s, ddc), (0, 0), st.wid, mask);
+        }
     }
 
     /// The span command: clipped to the tile. Its values are converted to
@@ -567,7 +841,7 @@ where
             .advanced(x0 - xr);
         if B::ALPHA && st.blend.translucent() {
             let a = (alpha_weight(s.alpha), 0);
-            self.blend_span::<true>(x0, s.y as i64, x1 - x0, start, a, st);
+            self.blend_span::<true, false>(x0, s.y as i64, x1 - x0, start, start.dc, a, st);
         } else {
             self.span(x0, s.y as i64, x1 - x0, start, st);
         }
@@ -581,6 +855,8 @@ const OPAQUE: u8 = 0;
 const BLEND_NO_Z: u8 = 1;
 const BLEND: u8 = 2;
 const BLEND_Z_WRITE: u8 = 3;
+/// Added to a span-loop mode: second-order colour stepping.
+const QUAD_STEP: u8 = 4;
 
 /// A colour in the output channel scale with [`COLOR_FRAC`] fraction bits.
 #[inline(always)]

@@ -4,8 +4,8 @@
 //! print.
 
 use crate::workloads::{
-    self, EDGE_AA_CMDS, FILL_CMDS, LARGE_BLEND_CMDS, LARGE_TRIANGLE_CMDS, LINE_CMDS, TRIANGLE_CMDS,
-    WU_LINE_CMDS,
+    self, EDGE_AA_CMDS, FILL_CMDS, LARGE_BLEND_CMDS, LARGE_QUAD_CMDS, LARGE_TEX_CMDS,
+    LARGE_TRIANGLE_CMDS, LINE_CMDS, TRIANGLE_CMDS, WU_LINE_CMDS,
 };
 use crate::{run_scene, Clock, SceneRun};
 use core::fmt::Write;
@@ -157,6 +157,8 @@ pub fn report_anim(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt::R
 enum Via {
     /// The tilerast command itself.
     Ours,
+    /// The tilerast command with the workloads' textures.
+    Textured,
     /// `embedded-graphics`' own primitive for it.
     EmbeddedGraphics,
 }
@@ -171,7 +173,8 @@ fn bench_one<C: TileConfig>(
 ) -> core::fmt::Result {
     let mut tile: Tile<{ (workloads::SIDE * workloads::SIDE / 8) as usize }, C> = Tile::new();
     let ticks = match via {
-        Via::Ours => workloads::draw(&mut tile, cmds, clock),
+        Via::Ours => workloads::draw(&mut tile, cmds, &[], clock),
+        Via::Textured => workloads::draw(&mut tile, cmds, &workloads::TEXTURES, clock),
         Via::EmbeddedGraphics => workloads::eg_primitives(&mut tile, cmds, clock),
     };
     match ticks {
@@ -187,7 +190,8 @@ fn bench_one<C: TileConfig>(
 /// Prints `bench NAME ticks T` for each workload: flat fill; Gouraud
 /// alone, with Z, with Z and window ID, and with those and 8x8 dither (all
 /// RGB565); large Gouraud triangles alone, with Z, and with Z, window ID
-/// and dither; the same translucent (alpha-blended, with Z); and with Z
+/// and dither; the same translucent (alpha-blended, with Z); textured in
+/// perspective, affine, quadratic and exact; and with Z
 /// and every edge antialiased; the same triangles through `embedded-graphics`' `Triangle`
 /// fill; lines, Bresenham and two-point (Wu) antialiased, and the same
 /// lines through `embedded-graphics`' `Line`.
@@ -245,6 +249,46 @@ pub fn report_benches(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt
         Via::Ours,
         out,
         clock,
+    )?;
+    bench_one::<workloads::QuadBench>(
+        "large_phong_z_rgb565",
+        &LARGE_QUAD_CMDS,
+        Via::Ours,
+        out,
+        clock,
+    )?;
+    let tex: &[Command] = &LARGE_TEX_CMDS;
+    bench_one::<workloads::TexBench<AffineTexturing>>(
+        "large_tex_affine_z_rgb565",
+        tex,
+        Via::Textured,
+        out,
+        clock,
+    )?;
+    bench_one::<workloads::TexBench<QuadraticTexturing>>(
+        "large_tex_quadratic_z_rgb565",
+        tex,
+        Via::Textured,
+        out,
+        clock,
+    )?;
+    bench_one::<workloads::TexBench<ExactTexturing>>(
+        "large_tex_exact_z_rgb565",
+        tex,
+        Via::Textured,
+        out,
+        clock,
+    )?;
+    let mut buf = [0u16; (workloads::SIDE * workloads::SIDE) as usize];
+    let (t, crc) = workloads::exact_phong::<f32>(&mut buf, clock);
+    writeln!(
+        out,
+        "bench exact_phong_f32_rgb565 ticks {t} crc 0x{crc:08x}"
+    )?;
+    let (t, crc) = workloads::exact_phong::<tilerast::geometry::Fx>(&mut buf, clock);
+    writeln!(
+        out,
+        "bench exact_phong_fixed_rgb565 ticks {t} crc 0x{crc:08x}"
     )?;
     bench_one::<Rgb565Format>(
         "eg_triangle_rgb565",

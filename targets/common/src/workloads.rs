@@ -34,11 +34,28 @@ pub static EDGE_AA_CMDS: [Command; 4 * TRIANGLES] = with_edges();
 /// splitting the whole tile along a diagonal, random colours, each pair
 /// nearer than the last (every pixel passes the Z test and is stored: the
 /// per-pixel cost of a span, with few rows and setups to share it).
-pub static LARGE_TRIANGLE_CMDS: [Command; LARGE_TRIANGLES] = large_triangles(false);
+pub static LARGE_TRIANGLE_CMDS: [Command; LARGE_TRIANGLES] = large_triangles(false, false);
 /// The same triangles translucent ([`Blend::Alpha`], random opacity per
 /// vertex): every pixel passes the Z test and is blended over the last
 /// pair — the per-pixel cost of alpha blending beside the opaque one.
-pub static LARGE_BLEND_CMDS: [Command; LARGE_TRIANGLES] = large_triangles(true);
+pub static LARGE_BLEND_CMDS: [Command; LARGE_TRIANGLES] = large_triangles(true, false);
+/// The same triangles quadratically shaded (fast Phong, seed 001 §IV.2:
+/// [`Command::Quadratic`] with random edge-midpoint colours), opaque: the
+/// per-pixel cost of fast Phong beside Gouraud's.
+pub static LARGE_QUAD_CMDS: [Command; LARGE_TRIANGLES] = large_triangles(false, true);
+/// The same pairs textured (seed 001 §IV.3): each pair a wall seen at
+/// an angle, `q` (`1/w`) falling 4:1 from its left edge to its right,
+/// [`TEXTURES`]' 16 x 16 texels across — the per-pixel cost of each
+/// perspective mode ([`TexBench`]) beside Gouraud's.
+pub static LARGE_TEX_CMDS: [Command; LARGE_TRIANGLES] = large_textured();
+/// The workloads' texture: 16 x 16 RGB565 texels in flash, repeating,
+/// nearest-filtered.
+pub static TEXTURES: [Texture<'static>; 1] =
+    [match Texture::new(&TEXELS, 16, 16, TexFormat::Rgb565) {
+        Ok(t) => t,
+        Err(_) => panic!("16 x 16 RGB565"),
+    }];
+static TEXELS: [u8; 512] = texels();
 /// Full-tile flat fills.
 pub static FILL_CMDS: [Command; FILLS] = fills();
 /// Lines across the tile in every direction, Bresenham.
@@ -113,7 +130,25 @@ const fn corner(x: i32, y: i32, z: u16, rng: &mut Rng) -> Vertex {
     Vertex::new(Coord::from_bits(x), Coord::from_bits(y), z, rng.rgb())
 }
 
-const fn large_triangles(blend: bool) -> [Command; LARGE_TRIANGLES] {
+/// `[a, b, c]` as a Gouraud triangle, or quadratic with midpoint colours
+/// from `rng`.
+const fn tri(v: [Vertex; 3], state: State, quad: bool, rng: &mut Rng) -> Command {
+    if quad {
+        Command::Quadratic {
+            alpha: 255,
+            v: [
+                QuadVertex::new(v[0], rng.rgb()),
+                QuadVertex::new(v[1], rng.rgb()),
+                QuadVertex::new(v[2], rng.rgb()),
+            ],
+            state,
+        }
+    } else {
+        Command::Triangle { v, state }
+    }
+}
+
+const fn large_triangles(blend: bool, quad: bool) -> [Command; LARGE_TRIANGLES] {
     let mut rng = Rng::new(0x6c61_7267_6574_7269);
     let side = SIDE as i32 * 16;
     let mut out = [PLACEHOLDER; LARGE_TRIANGLES];
@@ -130,14 +165,47 @@ const fn large_triangles(blend: bool) -> [Command; LARGE_TRIANGLES] {
             c.alpha = rng.rgb().r;
             d.alpha = rng.rgb().r;
         }
-        out[i] = Command::Triangle {
-            v: [a, b, c],
-            state,
-        };
-        out[i + 1] = Command::Triangle {
-            v: [a, c, d],
-            state,
-        };
+        out[i] = tri([a, b, c], state, quad, &mut rng);
+        out[i + 1] = tri([a, c, d], state, quad, &mut rng);
+        i += 2;
+    }
+    out
+}
+
+const fn texels() -> [u8; 512] {
+    let mut rng = Rng::new(0x7465_7874_7572_6573);
+    let mut out = [0u8; 512];
+    let mut i = 0;
+    while i < 512 {
+        out[i] = rng.byte();
+        i += 1;
+    }
+    out
+}
+
+/// A vertex of a [`LARGE_TEX_CMDS`] wall: `q` 4:1 from left to right.
+const fn tv(x: i32, y: i32, z: u16, u: u16, v: u16) -> TexVertex {
+    TexVertex {
+        x: Coord::from_bits(x),
+        y: Coord::from_bits(y),
+        z,
+        u,
+        v,
+        q: if x == 0 { 65535 } else { 16384 },
+    }
+}
+
+const fn large_textured() -> [Command; LARGE_TRIANGLES] {
+    let side = SIDE as i32 * 16;
+    let mut out = [PLACEHOLDER; LARGE_TRIANGLES];
+    let mut i = 0;
+    while i < LARGE_TRIANGLES {
+        let z = 60000 - 7000 * (i / 2) as u16;
+        let k = 16 * i as u16;
+        let (a, b) = (tv(0, 0, z, k, 0), tv(side, 0, z, k + 256, 0));
+        let (c, d) = (tv(side, side, z, k + 256, 256), tv(0, side, z, k, 256));
+        out[i] = Command::textured(0, [a, b, c], [255, 200, 160]);
+        out[i + 1] = Command::textured(0, [a, c, d], [255, 160, 200]);
         i += 2;
     }
     out
@@ -177,24 +245,95 @@ const fn fills() -> [Command; FILLS] {
     out
 }
 
-/// Ticks to clear the tile and draw `cmds` into it.
+/// Ticks to clear the tile and draw `cmds` into it, textured triangles
+/// with `textures`.
 pub fn draw<const N: usize, C: TileConfig>(
     tile: &mut Tile<N, C>,
     cmds: &[Command],
+    textures: &[Texture<'_>],
     clock: &mut impl Clock,
 ) -> Result<u64, Error> {
     tile.begin(Rect::new(0, 0, SIDE, SIDE), &Clear::default())?;
     clock.lap();
     for c in cmds {
-        tile.draw(c)?;
+        tile.draw_textured(c, textures)?;
     }
     Ok(clock.lap() as u64)
 }
+
+/// The tile configuration of the textured workload ([`LARGE_TEX_CMDS`]):
+/// RGB565 + Z16, perspective mode `X`.
+pub type TexBench<X> = Planes<
+    Rgb565Format,
+    Depth16,
+    NoWid,
+    NoDither,
+    NoAa,
+    FullPrecision,
+    NoBlending,
+    GouraudShading,
+    X,
+>;
 
 /// The tile configuration of the translucent workload ([`LARGE_BLEND_CMDS`]):
 /// RGB565 + Z16 with blending compiled in.
 pub type BlendBench =
     Planes<Rgb565Format, Depth16, NoWid, NoDither, NoAa, FullPrecision, AlphaBlending>;
+
+/// The tile configuration of the fast-Phong workload ([`LARGE_QUAD_CMDS`]):
+/// RGB565 + Z16 with quadratic shading compiled in.
+pub type QuadBench = Planes<
+    Rgb565Format,
+    Depth16,
+    NoWid,
+    NoDither,
+    NoAa,
+    FullPrecision,
+    NoBlending,
+    QuadraticShading,
+>;
+
+/// Exact Phong's per-pixel arithmetic alone, in back end `S` — no
+/// traversal, no Z, so a lower bound of what an exact-Phong span would
+/// cost: per pixel the normal is stepped (3 additions), normalised
+/// (`inv_sqrt`), lit (ambient + Lambert) and packed to RGB565 into `buf`,
+/// over the tile as many times as the large workloads cover it. Returns
+/// the ticks and a CRC of `buf`.
+pub fn exact_phong<S: tilerast::geometry::Real>(
+    buf: &mut [u16],
+    clock: &mut impl Clock,
+) -> (u64, u32) {
+    use tilerast::geometry::dot;
+    let q = |v: i64| S::from_q(v, 16);
+    let light = [q(26_000), q(36_000), q(40_000)];
+    let (ambient, kd) = (q(9_830), [q(204 << 16), q(90 << 16), q(51 << 16)]);
+    let (nx, ny) = ([q(700), q(-150), q(90)], [q(-120), q(650), q(40)]);
+    clock.lap();
+    for pass in 0..(LARGE_TRIANGLES / 2) as i64 {
+        let mut row = [q(-11_000 + 300 * pass), q(-10_000), q(60_000)];
+        for y in 0..SIDE as usize {
+            let mut n = row;
+            for x in 0..SIDE as usize {
+                let k = dot(n, n).inv_sqrt();
+                let d = (dot(n, light) * k).max(S::ZERO);
+                let lit = ambient + d;
+                let ch = |c: S, bits: u32| {
+                    let v = (c * lit).to_fixed(0).unwrap_or(255).clamp(0, 255) as u16;
+                    v >> (8 - bits)
+                };
+                buf[y * SIDE as usize + x] = ch(kd[0], 5) << 11 | ch(kd[1], 6) << 5 | ch(kd[2], 5);
+                n = [n[0] + nx[0], n[1] + nx[1], n[2] + nx[2]];
+            }
+            row = [row[0] + ny[0], row[1] + ny[1], row[2] + ny[2]];
+        }
+    }
+    let t = clock.lap() as u64;
+    let crc = buf
+        .iter()
+        .fold(0u32, |h, &p| h.rotate_left(5) ^ p as u32)
+        .wrapping_mul(0x9e37_79b9);
+    (t, crc)
+}
 
 /// CRC32 of a tile's packed pixels (row-major, each as 4 little-endian
 /// bytes): what the boards print after each workload, so the host can check
