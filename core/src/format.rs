@@ -80,6 +80,16 @@ pub trait PixelFormat: 'static {
     /// signed so that it also serves per-pixel steps) to lanes in the output
     /// scale with [`COLOR_FRAC`] fraction bits, rounded to nearest.
     fn lanes_from_rgb(rgb: [i64; 3]) -> Self::Lanes;
+    /// The lanes of a texel `rgb` (0..=255) modulated by `shade` (0.16, at
+    /// most `2^16 + 2^8`): `rgb shade / 2^16` mapped like
+    /// [`Self::lanes_from_rgb`]. RGB formats override it with 32-bit
+    /// arithmetic and no division (a texel a pixel: three library
+    /// divisions and six 64-bit multiplications on the Cortex-M0), within
+    /// 2^-7 of an output unit of it.
+    #[inline(always)]
+    fn lanes_modulated(rgb: [u8; 3], shade: u32) -> Self::Lanes {
+        Self::lanes_from_rgb(rgb.map(|c| c as i64 * shade as i64))
+    }
     /// Packs quantized channel values (each within `0..=MAX`).
     fn pack(q: Self::Lanes) -> u32;
     /// Converts a packed pixel to its `embedded-graphics` colour.
@@ -136,6 +146,16 @@ fn scale(v: i64, max: i32) -> i32 {
     }
 }
 
+/// `c shade / 2^16` (`c` on the 0..255 scale, `shade` 0.16) in the output
+/// scale `0..=max` with 16 fraction bits: `c max / 255` to 8 fraction bits
+/// (`x 257 / 2^16` for `/ 255`, within 2^-8), then times the shade, all
+/// below 2^32 (`255 · 255 · 257 < 2^24`, `65,280 · 65,792 < 2^32`).
+#[inline(always)]
+fn modulate(c: u8, max: u32, shade: u32) -> i32 {
+    let t = (c as u32 * max * 257) >> 8;
+    ((t * shade.min(65_792)) >> 8) as i32
+}
+
 /// Scales RGB (8.16) to a luma lane `0..=max` (x.16), rounded.
 #[inline]
 fn scale_luma(rgb: [i64; 3], max: i32) -> i32 {
@@ -158,6 +178,14 @@ macro_rules! rgb_format {
             #[inline(always)]
             fn lanes_from_rgb(rgb: [i64; 3]) -> [i32; 3] {
                 [scale(rgb[0], $r), scale(rgb[1], $g), scale(rgb[2], $b)]
+            }
+            #[inline(always)]
+            fn lanes_modulated(rgb: [u8; 3], shade: u32) -> [i32; 3] {
+                [
+                    modulate(rgb[0], $r, shade),
+                    modulate(rgb[1], $g, shade),
+                    modulate(rgb[2], $b, shade),
+                ]
             }
             #[inline(always)]
             fn pack(q: [i32; 3]) -> u32 {

@@ -227,7 +227,12 @@ fn build(board: &str, scenes: &Path, features: Option<&str>) -> PathBuf {
     } else {
         "thumbv7em-none-eabihf"
     };
-    dir.join("target")
+    // Cargo puts the board's build where `CARGO_TARGET_DIR` says, if set
+    // (relative to the board's directory, where cargo ran).
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map(|t| dir.join(t))
+        .unwrap_or_else(|| dir.join("target"));
+    target
         .join(triple)
         .join("release")
         .join(format!("tilerast-{board}"))

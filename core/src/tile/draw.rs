@@ -308,10 +308,10 @@ where
                 if pass {
                     let (u, v) = texmap::coords::<MODE>(ts, &sp);
                     let c = tex.sample(u, v);
-                    // Texel (8-bit) times shade (8.8) to 8.16: x 257/256 ~ /255.
-                    let l = (sp.l.max(0) >> 8) as i64;
-                    let m = |c: u8| (c as i64 * l * 257) >> 8;
-                    let src = F::lanes_from_rgb([m(c.r), m(c.g), m(c.b)]);
+                    // The shade (8.16 on the 0..255 scale) as a fraction
+                    // of full scale (0.16): x 257/256 for / 255.
+                    let l = ((sp.l.max(0) as u32 >> 8) * 257) >> 8;
+                    let src = F::lanes_modulated([c.r, c.g, c.b], l);
                     let out = if BLEND {
                         let old = F::unpack_masked(tile.color.get(idx), mask);
                         mix(src, old, a >> 16, bias)
