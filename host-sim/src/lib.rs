@@ -11,6 +11,7 @@ pub mod display;
 pub mod error;
 pub mod image;
 pub mod mesh;
+pub mod meshtex;
 pub mod metrics;
 pub mod obj;
 pub mod reference;

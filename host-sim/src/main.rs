@@ -4,7 +4,7 @@
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
-use tilerast_sim::{metrics, reference, render, Image, Scene};
+use tilerast_sim::{metrics, reference, Image, Scene};
 
 #[derive(Parser)]
 #[command(
@@ -91,6 +91,11 @@ enum Cmd {
         /// reference renderer).
         #[arg(long, value_enum)]
         shading: Option<ShadingArg>,
+        /// Override the perspective mode of textured meshes (seed 001
+        /// §IV.3): `affine`, `quadratic` (the RE's), `exact` (a division
+        /// per pixel) or `none` (their shade, untextured).
+        #[arg(long, value_enum)]
+        texture: Option<tilerast_sim::TexKind>,
     },
     /// Render a scene with the f64 reference renderer.
     Reference {
@@ -168,6 +173,7 @@ fn run(cli: Cli) -> tilerast_sim::Result<()> {
             edge_aa,
             aa,
             shading,
+            texture,
         } => {
             use tilerast_sim::mesh::ShadingKind;
             let kind = shading.map(|k| match k {
@@ -191,8 +197,11 @@ fn run(cli: Cli) -> tilerast_sim::Result<()> {
             if let Some(mode) = edge_aa {
                 s.set_edge_aa(matches!(mode, OnOff::On));
             }
+            if let Some(mode) = texture {
+                s.texturing = mode;
+            }
             let c = &s.config;
-            let r = render(c, &s.commands)?;
+            let r = s.render()?;
             println!("scene      {}", scene.display());
             for n in &s.notes {
                 println!("           {n}");
@@ -240,11 +249,18 @@ fn run(cli: Cli) -> tilerast_sim::Result<()> {
                         "shading    fast Phong on {quads} triangles (quadratic, seed 001 §IV.2)"
                     );
                 }
+                if !s.textures.is_empty() {
+                    println!(
+                        "texture    {} textures, perspective {} (seed 001 §IV.3)",
+                        s.textures.len(),
+                        s.texturing.name()
+                    );
+                }
                 r.image.save_png(&output)?;
             }
             println!("wrote      {}", output.display());
             if let Some(path) = ref_out {
-                let img = reference::render(c, &s.commands).to_image();
+                let img = s.reference().to_image();
                 img.save_png(&path)?;
                 println!("wrote      {} (f64 reference)", path.display());
                 println!("{}", metrics::compare(&r.image, &img)?);
@@ -259,7 +275,7 @@ fn run(cli: Cli) -> tilerast_sim::Result<()> {
             let img = if samples > 1 {
                 reference::supersample(&s.config, &s.commands, samples)
             } else {
-                reference::render(&s.config, &s.commands)
+                s.reference()
             };
             img.to_image().save_png(&output)?;
             println!("wrote {}", output.display());

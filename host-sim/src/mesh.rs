@@ -4,6 +4,7 @@
 //! a firmware draws them. An f64 path (`geometry = "reference"`) stays as
 //! the reference the core's two back ends are measured against.
 
+use crate::meshtex::{FilterKind, TexImage, TexturedMesh, UvKind};
 use std::path::Path;
 use tilerast::frame::CommandSource;
 use tilerast::geometry::{
@@ -101,6 +102,20 @@ pub struct MeshSpec {
     /// `"fast_phong"` (the RE's quadratic shading, seed 001 §IV.2).
     #[serde(default)]
     pub shading: ShadingKind,
+    /// A PNG texture for every group, relative to the scene file
+    /// (default: each group's `.mtl` `map_Kd`, if any). Textured groups
+    /// are lit white and modulate the texel ([`crate::meshtex`]).
+    pub texture: Option<String>,
+    /// Texture coordinates: `"obj"` (the file's `vt`, default),
+    /// `"spherical"` or `"cylindrical"` (projected, for models without).
+    #[serde(default)]
+    pub uv: UvKind,
+    /// Repeats of the texture across the coordinates, `[u, v]`.
+    #[serde(default = "default_uv_scale")]
+    pub uv_scale: [f64; 2],
+    /// Texel filter: `"bilinear"` (default) or `"nearest"`.
+    #[serde(default)]
+    pub filter: FilterKind,
 }
 
 /// How the core's geometry stage shades a mesh ([`tilerast::geometry::Shading`]).
@@ -136,6 +151,10 @@ impl MeshSpec {
         t.insert("obj".into(), toml::Value::String(obj.into()));
         MeshSpec::deserialize(toml::Value::Table(t)).expect("every other field has a default")
     }
+}
+
+fn default_uv_scale() -> [f64; 2] {
+    [1.0, 1.0]
 }
 
 fn default_true() -> bool {
@@ -192,6 +211,13 @@ pub struct MeshStats {
     /// commands this mesh pushed, by their index in the command list
     /// (the core geometry back ends only).
     pub phong: Vec<(usize, PhongTri)>,
+    /// The textures its textured commands index, in order.
+    pub textures: Vec<TexImage>,
+    /// Textured triangles drawn.
+    pub textured: usize,
+    /// Pieces of textured groups' triangles drawn untextured (clipped by
+    /// the geometry stage).
+    pub untextured: usize,
 }
 
 /// The edges of a triangle set that border something else on screen: those
@@ -274,7 +300,14 @@ pub fn load(
     limits: &crate::obj::Limits,
 ) -> crate::Result<MeshStats> {
     let obj = crate::obj::load(&base.join(&spec.obj), limits)?;
-    Ok(build(&obj, spec, screen, out, edges, tags))
+    let spec = MeshSpec {
+        texture: spec
+            .texture
+            .as_ref()
+            .map(|t| base.join(t).to_string_lossy().into_owned()),
+        ..spec.clone()
+    };
+    Ok(build(&obj, &spec, screen, out, edges, tags))
 }
 
 /// One OBJ group after the geometry stage: its projected vertices (`None`
@@ -283,8 +316,9 @@ pub fn load(
 struct Projected {
     verts: Vec<Option<Vertex>>,
     /// Triangle commands (Gouraud or quadratic), with their exact Phong
-    /// shading where known.
-    tris: Vec<(Command, Option<PhongTri>)>,
+    /// shading where known and, for whole (unclipped) triangles, their
+    /// OBJ vertices.
+    tris: Vec<(Command, Option<PhongTri>, Option<[u32; 3]>)>,
     wire: std::collections::BTreeSet<(u32, u32)>,
     kd: V3,
     state: State,
@@ -345,6 +379,7 @@ fn normals_of(mesh: &crate::obj::Model, pos: &[V3]) -> Vec<V3> {
 fn material_of(spec: &MeshSpec, obj: &crate::obj::Obj, mesh: &crate::obj::Model) -> (V3, Material) {
     let mtl = mesh.material.and_then(|i| obj.materials.get(i));
     let kd = match (spec.color, mtl.and_then(|m| m.diffuse)) {
+        _ if texture_of(spec, obj, mesh).is_some() => [1.0; 3],
         (Some(c), _) => c.map(|v| v as f64 / 255.0),
         (None, Some(d)) => d.map(|v| v as f64),
         (None, None) => [0.8; 3],
@@ -366,6 +401,92 @@ fn material_of(spec: &MeshSpec, obj: &crate::obj::Obj, mesh: &crate::obj::Model)
             .clamp(1.0, 255.0) as u8;
     }
     (kd, m)
+}
+
+/// The texture a group is drawn with: the spec's, else its material's
+/// `map_Kd` — when it has texture coordinates to draw it with.
+fn texture_of(
+    spec: &MeshSpec,
+    obj: &crate::obj::Obj,
+    mesh: &crate::obj::Model,
+) -> Option<std::path::PathBuf> {
+    let path = spec.texture.as_ref().map(Into::into).or_else(|| {
+        mesh.material
+            .and_then(|i| obj.materials.get(i))
+            .and_then(|m| m.diffuse_map.clone())
+    })?;
+    (spec.uv != UvKind::Obj || !mesh.texcoords.is_empty()).then_some(path)
+}
+
+/// Each group's texturing ([`TexturedMesh`]), loading its texture into
+/// `textures` once per file; a texture that cannot be read leaves its
+/// groups untextured, with a warning.
+fn texturing(
+    obj: &crate::obj::Obj,
+    spec: &MeshSpec,
+    screen: (u16, u16),
+    textures: &mut Vec<TexImage>,
+    warnings: &mut Vec<String>,
+) -> Vec<Option<TexturedMesh>> {
+    let (center, scale) = unit_fit(obj);
+    let cam = RefCamera::new(spec, screen);
+    let mut out = Vec::new();
+    for mesh in &obj.models {
+        let Some(path) = texture_of(spec, obj, mesh) else {
+            let has_map = mesh
+                .material
+                .and_then(|i| obj.materials.get(i))
+                .is_some_and(|m| m.diffuse_map.is_some());
+            if (has_map || spec.texture.is_some()) && spec.uv == UvKind::Obj {
+                warnings.push(format!(
+                    "{}: group `{}` has no texture coordinates (vt); drawn untextured",
+                    spec.obj, mesh.name
+                ));
+            }
+            out.push(None);
+            continue;
+        };
+        let tex = match textures.iter().position(|t| t.path == path) {
+            Some(k) => k,
+            None if textures.len() > u8::MAX as usize => {
+                warnings.push(format!("{}: more than 256 textures", spec.obj));
+                out.push(None);
+                continue;
+            }
+            None => match TexImage::load(&path, spec.filter) {
+                Ok(t) => {
+                    textures.push(t);
+                    textures.len() - 1
+                }
+                Err(e) => {
+                    warnings.push(format!("{}: texture: {e}; drawn untextured", spec.obj));
+                    out.push(None);
+                    continue;
+                }
+            },
+        };
+        let pos = fitted(mesh, center, scale);
+        let uv = match spec.uv {
+            UvKind::Obj => mesh.texcoords.iter().map(|t| t.map(f64::from)).collect(),
+            kind => crate::meshtex::projected_uv(kind, &pos),
+        };
+        let near = spec.clip[0];
+        out.push(Some(TexturedMesh {
+            tex: tex as u8,
+            size: (textures[tex].width, textures[tex].height),
+            uv,
+            scale: spec.uv_scale,
+            q: pos
+                .iter()
+                .map(|&p| {
+                    let z = cam.depth(p);
+                    (z >= near).then(|| 65535.0 * near / z)
+                })
+                .collect(),
+            seam: spec.uv != UvKind::Obj,
+        }));
+    }
+    out
 }
 
 /// The OBJ as core meshes in model space: positions fitted into the unit
@@ -523,20 +644,33 @@ pub fn build(
         GeometryKind::F32 => project_core::<f32>(obj, spec, screen, tags, &mut stats),
         GeometryKind::Fixed => project_core::<Fx>(obj, spec, screen, tags, &mut stats),
     };
+    let texturing = texturing(obj, spec, screen, &mut stats.textures, &mut stats.warnings);
     let mut solids = Vec::new();
-    for (g, mesh) in groups.iter().zip(&obj.models) {
+    for ((g, mesh), tex) in groups.iter().zip(&obj.models).zip(&texturing) {
         if spec.faces {
-            for (cmd, phong) in &g.tris {
+            for (cmd, phong, corners) in &g.tris {
                 let mut cmd = *cmd;
                 if let Some(st) = cmd.state_mut() {
                     *st = g.state;
                 }
-                solids.push(match cmd {
+                let v = match cmd {
                     Command::Quadratic { v, .. } => v.map(|q| q.vertex()),
                     Command::Triangle { v, .. } => v,
                     _ => unreachable!("the geometry stage emits triangles"),
-                });
-                if let Some(p) = phong {
+                };
+                solids.push(v);
+                if let Some(tex) = tex {
+                    match corners.and_then(|c| tex.command(v, c, g.state)) {
+                        Some(t) => {
+                            cmd = t;
+                            stats.textured += 1;
+                        }
+                        None => {
+                            cmd = Command::Triangle { v, state: g.state };
+                            stats.untextured += 1;
+                        }
+                    }
+                } else if let Some(p) = phong {
                     stats.phong.push((out.len(), p.clone()));
                 }
                 out.push(cmd);
@@ -736,6 +870,17 @@ fn project_core<S: Real>(
         }
     }
     owner.sort();
+    // Per group: (mesh, mesh vertex) -> OBJ vertex.
+    let obj_index: Vec<std::collections::HashMap<(usize, u16), u32>> = cm
+        .vertex_map
+        .iter()
+        .map(|map| {
+            map.iter()
+                .enumerate()
+                .filter_map(|(i, e)| e.map(|mv| (mv, i as u32)))
+                .collect()
+        })
+        .collect();
     let _ = scene.each_keyed(|key, cmd| {
         let tri = key >> 3;
         let at = owner.partition_point(|o| o.0 <= tri).saturating_sub(1);
@@ -745,23 +890,21 @@ fn project_core<S: Real>(
         if let Command::Triangle { .. } | Command::Quadratic { .. } = cmd {
             let g = &mut groups[gi];
             let t = parsed[m].triangle(first + (tri - first_global) as u16);
-            let phong = (key & 7 == 0)
+            // A whole (unclipped) triangle: its first piece, every vertex
+            // projected; its OBJ vertices.
+            let whole = key & 7 == 0 && t.iter().all(|&v| scene.projected(m, v).is_some());
+            let corners = match t.map(|mv| obj_index[gi].get(&(m, mv)).copied()) {
+                [Some(a), Some(b), Some(c)] if whole => Some([a, b, c]),
+                _ => None,
+            };
+            let phong = whole
                 .then(|| phong_tri(&parsed[m], first + (tri - first_global) as u16, &t, &lights))
                 .flatten();
-            g.tris.push((*cmd, phong));
-            if key & 7 == 0 {
-                // A whole (unclipped) triangle: its edges for the
-                // wireframe, as OBJ vertex indices.
-                let map = &cm.vertex_map[gi];
-                let obj_index = |mv: u16| {
-                    map.iter()
-                        .position(|e| *e == Some((m, mv)))
-                        .map(|i| i as u32)
-                };
-                if let [Some(a), Some(b), Some(c)] = t.map(obj_index) {
-                    for (i, j) in [(a, b), (b, c), (c, a)] {
-                        g.wire.insert((i.min(j), i.max(j)));
-                    }
+            g.tris.push((*cmd, phong, corners));
+            // Its edges for the wireframe, as OBJ vertex indices.
+            if let Some([a, b, c]) = corners {
+                for (i, j) in [(a, b), (b, c), (c, a)] {
+                    g.wire.insert((i.min(j), i.max(j)));
                 }
             }
         }
@@ -814,6 +957,11 @@ impl RefCamera {
         let p = [c * p[0] - s * p[2], p[1], s * p[0] + c * p[2]];
         let (s, c) = self.rx.sin_cos();
         [p[0], c * p[1] + s * p[2], -s * p[1] + c * p[2]]
+    }
+
+    /// Eye-space depth of a fitted model point (along the view direction).
+    fn depth(&self, p: V3) -> f64 {
+        dot(sub(self.rotate(p), self.eye), self.fwd)
     }
 
     fn rotate(&self, p: V3) -> V3 {
@@ -968,6 +1116,7 @@ fn project_reference(
                             state: g.state,
                         },
                         None,
+                        Some(*t),
                     ));
                     for (i, j) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
                         g.wire.insert((i.min(j), i.max(j)));

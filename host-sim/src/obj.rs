@@ -60,6 +60,9 @@ pub struct Material {
     pub specular: Option<[f32; 3]>,
     /// Specular exponent `Ns`.
     pub shininess: Option<f32>,
+    /// Diffuse texture `map_Kd`, resolved against the `.mtl` file's folder
+    /// (options before the file name, such as `-s`, are skipped).
+    pub diffuse_map: Option<std::path::PathBuf>,
 }
 
 /// One group of faces with one material.
@@ -73,6 +76,9 @@ pub struct Model {
     pub positions: Vec<[f32; 3]>,
     /// Normals, one per model vertex, or empty when the faces give none.
     pub normals: Vec<[f32; 3]>,
+    /// Texture coordinates `vt` (`u`, `v`; `v` grows upwards as in every
+    /// OBJ), one per model vertex, or empty unless every face gives them.
+    pub texcoords: Vec<[f32; 2]>,
     /// Whether each position is finite (a vertex that is not makes the
     /// faces that use it drop, with a warning naming its line).
     pub finite: Vec<bool>,
@@ -165,7 +171,8 @@ pub fn load(path: &Path, limits: &Limits) -> Result<Obj> {
 }
 
 /// A vertex as faces name it: position, optional normal (0-based).
-type Corner = (usize, Option<usize>);
+/// A face corner: position, texture coordinate and normal indices.
+type Corner = (usize, Option<usize>, Option<usize>);
 
 struct Builder {
     model: Model,
@@ -188,13 +195,22 @@ impl Builder {
         self.model.triangles.is_empty() && self.model.lines.is_empty()
     }
 
-    fn vertex(&mut self, c: Corner, pos: &[([f32; 3], bool)], normals: &[[f32; 3]]) -> u32 {
+    fn vertex(
+        &mut self,
+        c: Corner,
+        pos: &[([f32; 3], bool)],
+        texcoords: &[[f32; 2]],
+        normals: &[[f32; 3]],
+    ) -> u32 {
         let m = &mut self.model;
         *self.index.entry(c).or_insert_with(|| {
             let (p, ok) = pos[c.0];
             m.positions.push(p);
             m.finite.push(ok);
-            if let Some(n) = c.1 {
+            if let Some(t) = c.1 {
+                m.texcoords.push(texcoords[t]);
+            }
+            if let Some(n) = c.2 {
                 m.normals.push(normals[n]);
             }
             (m.positions.len() - 1) as u32
@@ -209,6 +225,10 @@ impl Builder {
         if self.model.normals.len() != self.model.positions.len() {
             self.model.normals.clear();
         }
+        // Texture coordinates likewise.
+        if self.model.texcoords.len() != self.model.positions.len() {
+            self.model.texcoords.clear();
+        }
         out.push(self.model);
     }
 }
@@ -219,7 +239,7 @@ pub fn parse(src: &[u8], file: &str, dir: Option<&Path>, limits: &Limits) -> Res
     let mut obj = Obj::default();
     let mut pos: Vec<([f32; 3], bool)> = Vec::new();
     let mut normals: Vec<[f32; 3]> = Vec::new();
-    let mut texcoords = 0usize;
+    let mut texcoords: Vec<[f32; 2]> = Vec::new();
     let mut cur = Builder::new(String::new(), None);
     let mut names: HashMap<String, usize> = HashMap::new();
     let mut bad_used = 0usize;
@@ -244,7 +264,20 @@ pub fn parse(src: &[u8], file: &str, dir: Option<&Path>, limits: &Limits) -> Res
                 pos.push((p, ok));
             }
             "vn" => normals.push(floats::<3>(&line, &mut words, &at)?),
-            "vt" => texcoords += 1,
+            "vt" => {
+                // `u [v [w]]`: a missing `v` is 0, `w` is ignored.
+                let u = floats::<1>(&line, &mut words, &at)?[0];
+                let v = match words.next() {
+                    Some(w) => w.parse::<f32>().map_err(|_| {
+                        invalid(at(column(&line, w)), format!("`{w}` is not a number"))
+                    })?,
+                    None => 0.0,
+                };
+                if !(u.is_finite() && v.is_finite()) {
+                    return Err(invalid(at(1), "texture coordinate is not finite".into()));
+                }
+                texcoords.push([u, v]);
+            }
             "g" | "o" => {
                 let name = rest();
                 let material = cur.model.material;
@@ -313,9 +346,9 @@ pub fn parse(src: &[u8], file: &str, dir: Option<&Path>, limits: &Limits) -> Res
                         };
                     let v = index(parts.next(), pos.len(), "vertex")?
                         .ok_or_else(|| invalid(at(col), format!("`{w}` names no vertex")))?;
-                    index(parts.next(), texcoords, "texture coordinate")?;
+                    let vt = index(parts.next(), texcoords.len(), "texture coordinate")?;
                     let vn = index(parts.next(), normals.len(), "normal")?;
-                    corners.push((v, vn));
+                    corners.push((v, vt, vn));
                 }
                 if corners.iter().any(|c| !pos[c.0].1) {
                     bad_used += 1;
@@ -323,7 +356,7 @@ pub fn parse(src: &[u8], file: &str, dir: Option<&Path>, limits: &Limits) -> Res
                 }
                 let ids: Vec<u32> = corners
                     .iter()
-                    .map(|&c| cur.vertex(c, &pos, &normals))
+                    .map(|&c| cur.vertex(c, &pos, &texcoords, &normals))
                     .collect();
                 match (key, ids.len()) {
                     (_, 0 | 1) => obj.warnings.push(format!(
@@ -393,6 +426,13 @@ pub fn load_mtl(path: &Path, limits: &Limits) -> Result<Vec<Material>> {
             "Kd" => m.diffuse = Some(floats::<3>(&line, &mut words, &at)?),
             "Ks" => m.specular = Some(floats::<3>(&line, &mut words, &at)?),
             "Ns" => m.shininess = Some(floats::<1>(&line, &mut words, &at)?[0]),
+            "map_Kd" => {
+                // `map_Kd [-option value...] file`: the last word is the file.
+                if let Some(name) = words.last() {
+                    let dir = path.parent().unwrap_or(Path::new("."));
+                    m.diffuse_map = Some(dir.join(name));
+                }
+            }
             _ => {}
         }
     }

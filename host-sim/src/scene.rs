@@ -13,6 +13,8 @@
 //! background = [16, 16, 32]  # clear colour
 //! aa = "ruf8"                # coverage antialiasing: none | ruf4 | ruf8 | ruf16 |
 //!                            # ss1 | ss4 | ss8 | ss16 | grid4 | grid8 (default none)
+//! texturing = "quadratic"    # textured meshes' perspective: none | affine |
+//!                            # quadratic (default) | exact (seed 001 §IV.3)
 //!
 //! [[window]]                 # claims a rectangle for a window ID, in order
 //! id = 1
@@ -71,6 +73,12 @@
 //! eye = [0, 1, 3]
 //! rotate_y = 30
 //! edge_aa = true             # optional: antialias its silhouette and open boundary
+//! shading = "fast_phong"     # optional: gouraud (default) | fast_phong
+//! texture = "checker.png"    # optional: a PNG for every group (default: the
+//!                            # .mtl's map_Kd); textured groups are lit white
+//! uv = "spherical"           # optional: obj (its vt, default) | spherical | cylindrical
+//! uv_scale = [4, 2]          # optional: repeats of the texture
+//! filter = "bilinear"        # optional: bilinear (default) | nearest
 //! ```
 //!
 //! Translucent commands (seed 001 §IV.4) blend `C = α C + (1 - α) C_dst`
@@ -120,6 +128,12 @@ struct ScreenSpec {
     background: [u8; 3],
     #[serde(default)]
     aa: crate::render::AaKind,
+    #[serde(default = "quadratic")]
+    texturing: crate::render::TexKind,
+}
+
+fn quadratic() -> crate::render::TexKind {
+    crate::render::TexKind::Quadratic
 }
 
 fn default_tile() -> [u16; 2] {
@@ -300,6 +314,12 @@ pub struct Scene {
     /// Exact Phong's shading of the lit mesh triangles, by command index
     /// ([`Scene::exact_phong`]).
     pub phong: std::collections::HashMap<usize, mesh::PhongTri>,
+    /// Textures of the textured meshes; a textured command's `tex`
+    /// indexes them.
+    pub textures: Vec<crate::meshtex::TexImage>,
+    /// How textured triangles are drawn (`[screen] texturing`, default
+    /// quadratic; `none` draws their shade).
+    pub texturing: crate::render::TexKind,
     /// Commands before the antialiased edges.
     solid_commands: usize,
     /// Every edge that edge antialiasing can draw (triangles' edges, meshes'
@@ -533,6 +553,7 @@ impl Scene {
         let mut meshes = Vec::new();
         let mut mesh_stats = MeshStats::default();
         let mut phong = std::collections::HashMap::new();
+        let mut textures: Vec<crate::meshtex::TexImage> = Vec::new();
         let mut warnings = Vec::new();
         let mut edges = Vec::new();
         // Object tags for coverage antialiasing: one per triangle of the
@@ -724,6 +745,7 @@ impl Scene {
                 }
                 CommandSpec::Mesh(spec) => {
                     let mut found = Vec::new();
+                    let first_command = commands.len();
                     let mesh_spec = mesh::MeshSpec {
                         edge_aa: true,
                         shading: shading.unwrap_or(spec.shading),
@@ -748,6 +770,22 @@ impl Scene {
                     if st.obj_lines > 0 {
                         note += &format!(", {} OBJ lines", st.obj_lines);
                     }
+                    if st.textured + st.untextured > 0 {
+                        note += &format!(
+                            ", {} textured triangles ({} clipped pieces untextured)",
+                            st.textured, st.untextured
+                        );
+                    }
+                    // Its textures join the scene's: renumber its commands'.
+                    for c in &mut commands[first_command..] {
+                        if let Command::Textured { tex, .. } = c {
+                            let k = textures.len() + *tex as usize;
+                            *tex = u8::try_from(k).map_err(|_| {
+                                key("texture")("a scene holds at most 256 textures".into())
+                            })?;
+                        }
+                    }
+                    textures.extend(st.textures);
                     meshes.push((note, first_edge..edges.len()));
                     warnings.extend(st.warnings.iter().map(|w| format!("warning: {w}")));
                     mesh_stats.vertices += st.vertices;
@@ -768,6 +806,8 @@ impl Scene {
             notes: Vec::new(),
             mesh: mesh_stats,
             phong,
+            textures,
+            texturing: s.texturing,
             edges,
             meshes,
             warnings,
@@ -778,6 +818,52 @@ impl Scene {
 }
 
 impl Scene {
+    /// The core's view of [`Scene::textures`], in order.
+    pub fn core_textures(&self) -> Vec<tilerast::texture::Texture<'_>> {
+        self.textures.iter().map(|t| t.texture()).collect()
+    }
+
+    /// Renders the scene with the core, its textures in its perspective
+    /// mode ([`crate::render::render_textured`]; without textured
+    /// commands, [`crate::render::render`]).
+    pub fn render(&self) -> Result<crate::render::Rendered> {
+        let textured = self
+            .commands
+            .iter()
+            .any(|c| matches!(c, Command::Textured { .. }));
+        if !textured {
+            return Ok(crate::render::render(&self.config, &self.commands)?);
+        }
+        let c = &self.config;
+        if self.texturing != crate::render::TexKind::None
+            && (!c.depth
+                || c.wid
+                || c.aa != crate::render::AaKind::None
+                || ![0, 1, 4].contains(&c.dither))
+        {
+            return Err(Error::Unsupported(format!(
+                "textured meshes are rendered with a depth plane, no window IDs, no coverage AA and dither 0 or 4 (this scene: depth {}, window IDs {}, aa {}, dither {})",
+                c.depth,
+                c.wid,
+                c.aa.name(),
+                c.dither
+            )));
+        }
+        Ok(crate::render::render_textured(
+            c,
+            &self.commands,
+            &self.core_textures(),
+            self.texturing,
+            0,
+        )?)
+    }
+
+    /// The scene in the f64 reference renderer, textured triangles exact
+    /// (perspective-correct, f64 filtering).
+    pub fn reference(&self) -> crate::reference::RefFrame {
+        crate::reference::render_textured(&self.config, &self.commands, &self.core_textures())
+    }
+
     /// The scene in the f64 reference renderer with every lit mesh
     /// triangle exact-Phong shaded: the normal interpolated across it
     /// (screen-space weights) and normalised at every pixel, then lit as
