@@ -495,6 +495,22 @@ impl Command {
         }
     }
 
+    /// Whether the command is a triangle with an edge flagged for area
+    /// sampling ([`Vertex::edge_flag`]): then it can touch every pixel of
+    /// its [`Self::coverage_bounds`] in tiles configured with
+    /// [`AreaAa`](crate::area::AreaAa).
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// let v = Vertex::new(Coord::from_num(1), Coord::from_num(1), 0, Rgb::default());
+    /// let w = Vertex::new(Coord::from_num(9), Coord::from_num(2), 0, Rgb::default());
+    /// assert!(!Command::triangle([v, w, v]).edge_flagged());
+    /// assert!(Command::triangle([v, w.with_edge_flag(true), v]).edge_flagged());
+    /// ```
+    pub fn edge_flagged(&self) -> bool {
+        matches!(self, Command::Triangle { v, .. } if v.iter().any(|v| v.edge_flag))
+    }
+
     /// The screen pixels the command can touch, `None` when it touches none.
     pub fn bounds(&self) -> Option<Rect> {
         match self {
@@ -557,12 +573,13 @@ mod log {
         fn format(&self, f: defmt::Formatter) {
             defmt::write!(
                 f,
-                "Vertex {{ x: {}/16, y: {}/16, z: {}, color: {}, alpha: {} }}",
+                "Vertex {{ x: {}/16, y: {}/16, z: {}, color: {}, alpha: {}, edge_flag: {} }}",
                 self.x.to_bits(),
                 self.y.to_bits(),
                 self.z,
                 self.color,
-                self.alpha
+                self.alpha,
+                self.edge_flag
             )
         }
     }

@@ -292,8 +292,9 @@ impl Frame {
         let count = g.cols * g.rows;
         let mut stats = FrameStats::default();
         let aa = <C::Aa as AaMode>::SAMPLES > 0;
+        let area = <C::Aa as AaMode>::AREA;
         let bounds = |cmd: &Command| {
-            if aa {
+            if aa || area && cmd.edge_flagged() {
                 cmd.coverage_bounds()
             } else {
                 cmd.bounds()

@@ -93,8 +93,10 @@ impl From<Rect> for embedded_graphics_core::primitives::Rectangle {
 }
 
 /// A triangle vertex: sub-pixel position, 16-bit depth, 24-bit colour and
-/// an 8-bit opacity (used only by translucent commands, [`crate::command::Blend`];
-/// it lives in the struct's padding, so a vertex stays 16 bytes).
+/// an 8-bit opacity (used only by translucent commands, [`crate::command::Blend`])
+/// and an edge flag (used only by area-sampling antialiasing,
+/// [`crate::area`]); both live in the struct's padding, so a vertex stays
+/// 16 bytes.
 ///
 /// ```
 /// use tilerast::prelude::*;
@@ -117,6 +119,12 @@ pub struct Vertex {
     /// like a colour channel (the RE's α-channel) when the command blends,
     /// ignored otherwise.
     pub alpha: u8,
+    /// The edge from this vertex to the next one of its triangle borders
+    /// something else on screen (a silhouette, an open boundary): tiles
+    /// configured with [`AreaAa`](crate::area::AreaAa) antialias it by
+    /// exact area coverage (OpenGL's edge flag). Ignored elsewhere and by
+    /// every other tile; `false` by default.
+    pub edge_flag: bool,
 }
 
 impl Default for Vertex {
@@ -135,7 +143,21 @@ impl Vertex {
             z,
             color,
             alpha: 255,
+            edge_flag: false,
         }
+    }
+
+    /// The same vertex with its edge to the next vertex flagged for
+    /// area-sampling antialiasing ([`Vertex::edge_flag`]).
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// let v = Vertex::new(Coord::from_num(1), Coord::from_num(2), 3, Rgb::new(4, 5, 6));
+    /// assert!(v.with_edge_flag(true).edge_flag && !v.edge_flag);
+    /// ```
+    pub const fn with_edge_flag(mut self, flag: bool) -> Self {
+        self.edge_flag = flag;
+        self
     }
 
     /// The same vertex with opacity `alpha` (`0..=255`).

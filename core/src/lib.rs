@@ -87,7 +87,7 @@ pub mod command;
 pub mod list;
 mod raster;
 mod setup;
-pub use raster::{coverage, line};
+pub use raster::{area, coverage, line};
 pub mod fragment;
 pub use fragment::dither;
 pub mod config;
@@ -108,6 +108,7 @@ pub use fixed;
 
 /// Everything a firmware author needs, in one import.
 pub mod prelude {
+    pub use crate::area::AreaAa;
     pub use crate::bin::Bins;
     pub use crate::command::{Blend, Command, QuadVertex, SpanCmd, State, Vertex};
     pub use crate::config::{groups, Planes, Ssd1306Config, St7789Config, TileConfig};

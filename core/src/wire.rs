@@ -25,6 +25,8 @@
 //! | 12 | quadratic triangle, 16-bit coordinates | 3 x (`x: i16, y: i16, z: u16, r, g, b`, midpoint `r, g, b`), then one α |
 //! | 13 | textured triangle, 32-bit coordinates | `tex: u8`, 3 x (`x: i32, y: i32, z: u16`, `u, v, q: u16`, `shade: u8`), then one α |
 //! | 14 | textured triangle, 16-bit coordinates | `tex: u8`, 3 x (`x: i16, y: i16, z: u16`, `u, v, q: u16`, `shade: u8`), then one α |
+//! | 15 | triangle with edge flags ([`Vertex::edge_flag`]), 32-bit coordinates | as tag 1, then `flags: u8` (bit `i`: vertex `i`'s edge; not 0) |
+//! | 16 | triangle with edge flags, 16-bit coordinates | as tag 2, then `flags: u8` |
 //! | 7 | indexed mesh: triangles sharing vertices | `nv: u16, nt: u16`, `nv` x (`x: i16, y: i16, z: u16, r, g, b`), `nt` x 3 x `u16` index |
 //!
 //! A mesh record replays as its `nt` triangles, in order, each with the
@@ -269,9 +271,20 @@ pub fn encode(cmd: &Command, buf: &mut [u8]) -> Result<usize, Error> {
         Command::Triangle { v, state } => {
             let small = v.iter().all(small);
             let alpha = v.iter().any(|v| v.alpha != 255);
-            w.head(if small { 2 } else { 1 }, state, alpha)?;
+            let flags = v
+                .iter()
+                .enumerate()
+                .fold(0u8, |f, (i, v)| f | ((v.edge_flag as u8) << i));
+            let tag = match (flags != 0, small) {
+                (false, s) => 1 + s as u8,
+                (true, s) => 15 + s as u8,
+            };
+            w.head(tag, state, alpha)?;
             for v in v {
                 w.vertex(v, small)?;
+            }
+            if flags != 0 {
+                w.put(&[flags])?;
             }
         }
         Command::Quadratic { alpha, v, state } => {
@@ -374,8 +387,18 @@ pub fn decode(buf: &[u8]) -> Result<(Command, usize), Error> {
     };
     let (tag, state) = r.head()?;
     let cmd = match tag & !FLAGS {
-        t @ (1 | 2) => {
-            let v = [r.vertex(t == 2)?, r.vertex(t == 2)?, r.vertex(t == 2)?];
+        t @ (1 | 2 | 15 | 16) => {
+            let small = matches!(t, 2 | 16);
+            let mut v = [r.vertex(small)?, r.vertex(small)?, r.vertex(small)?];
+            if t >= 15 {
+                let flags = r.u8()?;
+                if flags == 0 || flags > 7 {
+                    return Err(Error::Malformed);
+                }
+                for (i, v) in v.iter_mut().enumerate() {
+                    v.edge_flag = flags & (1 << i) != 0;
+                }
+            }
             Command::Triangle { v, state }
         }
         t @ (11 | 12) => {

@@ -15,7 +15,7 @@ use tilerast::prelude::*;
 use tilerast_sim::image::Image;
 use tilerast_sim::metrics::{compare, Diff};
 use tilerast_sim::reference;
-use tilerast_sim::render::{render, Config, FormatKind};
+use tilerast_sim::render::{render, render_timed, AaKind, Config, FormatKind};
 use tilerast_sim::rng::Rng;
 use tilerast_sim::scene::Scene;
 
@@ -33,7 +33,13 @@ pub struct Measured {
     pub diff: Diff,
     /// The render.
     pub image: Image,
+    /// Our renders' cost: host ns per screen pixel (median of
+    /// [`TIMED_RUNS`]) and the tile's bits per pixel.
+    pub cost: Option<(f64, u32)>,
 }
+
+/// Timed renders per measured mode of ours (the median is reported).
+pub const TIMED_RUNS: usize = 5;
 
 fn config(w: u16, h: u16) -> Config {
     Config {
@@ -282,11 +288,43 @@ fn measured(subject: &str, mode: &str, image: Image, ideal: &Image) -> Measured 
         mode: mode.into(),
         diff: compare(&image, ideal).expect("same size"),
         image,
+        cost: None,
     }
 }
 
 fn ours(cfg: &Config, cmds: &[Command]) -> Image {
     render(cfg, cmds).expect("valid scene").image
+}
+
+/// Our render in antialiasing mode `aa`, timed, measured against `ideal`.
+fn ours_measured(
+    subject: &str,
+    mode: &str,
+    cfg: &Config,
+    aa: AaKind,
+    cmds: &[Command],
+    ideal: &Image,
+) -> Measured {
+    let cfg = Config { aa, ..*cfg };
+    let r = render_timed(&cfg, cmds, TIMED_RUNS).expect("valid scene");
+    Measured {
+        cost: Some((r.ns_per_pixel.unwrap_or(0.0), r.bits_per_pixel)),
+        ..measured(subject, mode, r.image, ideal)
+    }
+}
+
+/// The coverage families beside the aliased render and seed 003's edges:
+/// the RE's area sampling through α (seed 001 §IV.5), the RUF buffer
+/// (seed 000) and supersampling at the same 8 samples.
+fn coverage_rows(s: &str, cfg: &Config, cmds: &[Command], ideal: &Image) -> Vec<Measured> {
+    [
+        (AaKind::Area, "tilerast area sampling (α, seed 001)"),
+        (AaKind::Ruf8, "tilerast RUF-8 (seed 000)"),
+        (AaKind::Ss8, "tilerast supersampling, 8 sparse"),
+    ]
+    .iter()
+    .map(|&(aa, mode)| ours_measured(s, mode, cfg, aa, cmds, ideal))
+    .collect()
 }
 
 /// Every mode on the line scene, the solid scene and the scene files given
@@ -320,24 +358,26 @@ pub fn measure(scenes: &[Scene]) -> Vec<(Image, Vec<Measured>)> {
     let (cfg, tris) = solid_scene();
     let ideal = reference::supersample(&cfg, &solids(&tris, false), IDEAL_SAMPLES).to_image();
     let s = "24 triangles, 128x96";
-    out.push((
-        ideal.clone(),
-        vec![
-            measured(
-                s,
-                "tilerast aliased",
-                ours(&cfg, &solids(&tris, false)),
-                &ideal,
-            ),
-            measured(
-                s,
-                "tilerast edge AA (eq. 8)",
-                ours(&cfg, &solids(&tris, true)),
-                &ideal,
-            ),
-            measured(s, "tiny-skia path fill, AA", skia_fill(&cfg, &tris), &ideal),
-        ],
+    let (plain, edged) = (solids(&tris, false), solids(&tris, true));
+    let mut rows = vec![
+        ours_measured(s, "tilerast aliased", &cfg, AaKind::None, &plain, &ideal),
+        ours_measured(
+            s,
+            "tilerast edge AA (eq. 8)",
+            &cfg,
+            AaKind::None,
+            &edged,
+            &ideal,
+        ),
+    ];
+    rows.extend(coverage_rows(s, &cfg, &plain, &ideal));
+    rows.push(measured(
+        s,
+        "tiny-skia path fill, AA",
+        skia_fill(&cfg, &tris),
+        &ideal,
     ));
+    out.push((ideal.clone(), rows));
 
     for scene in scenes {
         let mut sc = scene.clone();
@@ -347,16 +387,26 @@ pub fn measure(scenes: &[Scene]) -> Vec<(Image, Vec<Measured>)> {
         let s = format!("{}, {}x{}", sc.name, cfg.width, cfg.height);
         sc.set_edge_aa(false);
         let ideal = reference::supersample(&cfg, &sc.commands, IDEAL_SAMPLES).to_image();
-        let off = ours(&cfg, &sc.commands);
+        let plain = sc.commands.clone();
+        let mut rows = vec![ours_measured(
+            &s,
+            "tilerast aliased",
+            &cfg,
+            AaKind::None,
+            &plain,
+            &ideal,
+        )];
         sc.set_edge_aa(true);
-        let on = ours(&cfg, &sc.commands);
-        out.push((
-            ideal.clone(),
-            vec![
-                measured(&s, "tilerast aliased", off, &ideal),
-                measured(&s, "tilerast edge AA (eq. 8)", on, &ideal),
-            ],
+        rows.push(ours_measured(
+            &s,
+            "tilerast edge AA (eq. 8)",
+            &cfg,
+            AaKind::None,
+            &sc.commands,
+            &ideal,
         ));
+        rows.extend(coverage_rows(&s, &cfg, &plain, &ideal));
+        out.push((ideal.clone(), rows));
     }
     out
 }
@@ -364,12 +414,16 @@ pub fn measure(scenes: &[Scene]) -> Vec<(Image, Vec<Measured>)> {
 /// The measurements as a Markdown table.
 pub fn table(groups: &[(Image, Vec<Measured>)]) -> String {
     let mut s = String::from(
-        "| subject | renderer, mode | eq. 8 error per pixel | PSNR (dB) | max abs error |\n| --- | --- | ---: | ---: | ---: |\n",
+        "| subject | renderer, mode | eq. 8 error per pixel | PSNR (dB) | max abs error | host ns / px | tile bits / px |\n| --- | --- | ---: | ---: | ---: | ---: | ---: |\n",
     );
     for (_, rows) in groups {
         for m in rows {
+            let (ns, bits) = match m.cost {
+                Some((ns, bits)) => (format!("{ns:.1}"), bits.to_string()),
+                None => ("—".into(), "—".into()),
+            };
             s += &format!(
-                "| {} | {} | {:.1} | {:.2} | {} |\n",
+                "| {} | {} | {:.1} | {:.2} | {} | {ns} | {bits} |\n",
                 m.subject, m.mode, m.diff.mse_per_pixel, m.diff.psnr, m.diff.max_abs
             );
         }

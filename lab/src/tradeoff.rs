@@ -456,6 +456,7 @@ impl Setting {
             Setting::Dither(_, 0) => "no dither".into(),
             Setting::Dither(_, d) => format!("{d}x{d}"),
             Setting::Aa(AaKind::None, true) => "edge AA".into(),
+            Setting::Aa(AaKind::Area, _) => "area (α)".into(),
             Setting::Aa(k, _) => k.name().into(),
             Setting::Line(_, wu) => if wu { "Wu" } else { "Bresenham" }.into(),
             Setting::Geometry(GeometryKind::F32) => "f32 (core)".into(),
@@ -496,6 +497,9 @@ impl Setting {
         match self {
             Setting::Aa(AaKind::None, false) => Some("Gouraud + Z"),
             Setting::Aa(AaKind::None, true) => Some("Gouraud + Z + edge AA (eq. 8) on every edge"),
+            Setting::Aa(AaKind::Area, _) => {
+                Some("Gouraud + Z + area sampling (α, seed 001 §IV.5) on every edge")
+            }
             Setting::Line(FormatKind::Rgb565, false) => Some("Bresenham, RGB565"),
             Setting::Line(FormatKind::Rgb565, true) => Some("two-point (Wu) antialiased, RGB565"),
             Setting::Dither(FormatKind::Rgb565, 0) => Some("Gouraud + Z + window ID"),
@@ -589,7 +593,7 @@ fn coverage_traffic(s: &Subject, k: AaKind) -> u64 {
         AaKind::Ruf16 | AaKind::Ss16 => traffic_with::<Sparse16, 16>(cmds, w, h, sz(16), true),
         AaKind::Grid4 => traffic_with::<Grid4x4, 16>(cmds, w, h, sz(16), true),
         AaKind::Grid8 => traffic_with::<Grid8x8, 64>(cmds, w, h, sz(64), true),
-        AaKind::None => traffic_with::<Centre1, 1>(cmds, w, h, sz(1), true),
+        AaKind::None | AaKind::Area => traffic_with::<Centre1, 1>(cmds, w, h, sz(1), true),
     };
     match k {
         AaKind::Ruf4 | AaKind::Ruf8 | AaKind::Ruf16 => ruf.total(),
@@ -651,6 +655,13 @@ fn measure(s: &Subject, set: Setting, runs: usize, m4: &[(String, f64)]) -> Resu
                 (
                     render_timed(&cfg, &s.cmds, runs),
                     Some(aliased_traffic(&s.cmds, &s.cfg, FormatKind::Rgb888, 2)),
+                )
+            } else if k == AaKind::Area {
+                // Area sampling reads and writes the same silhouette pixels
+                // as edge AA: its traffic model is the edges'.
+                (
+                    render_timed(&cfg, &s.cmds, runs),
+                    Some(aliased_traffic(&s.edges, &s.cfg, FormatKind::Rgb888, 2)),
                 )
             } else {
                 (
@@ -855,6 +866,7 @@ pub fn run(opt: &Options) -> Result<Vec<Point>, String> {
         for (k, e) in [
             (AaKind::None, false),
             (AaKind::None, true),
+            (AaKind::Area, false),
             (AaKind::Ruf4, false),
             (AaKind::Ruf8, false),
             (AaKind::Ruf16, false),

@@ -434,10 +434,18 @@ fn firmware_output_is_bit_identical_to_the_host() {
             );
             r.benches.extend(b1.benches);
             r.bench_crcs.extend(b1.bench_crcs);
+            // And the area-sampling workload, another.
+            let area = parse(&run(board, &build(board, &scenes, Some("bench_area"))));
+            r.benches.extend(area.benches);
+            r.bench_crcs.extend(area.bench_crcs);
         }
-        // The translucent, fast-Phong and textured workloads leave the same
-        // bytes as on the host.
+        // The translucent, fast-Phong, textured and area-sampled workloads
+        // leave the same bytes as on the host.
         for (name, host) in [
+            (
+                "gouraud_z_area_aa_rgb565",
+                host_bench_crc::<workloads::AreaAaBench>(&workloads::AREA_AA_CMDS),
+            ),
             (
                 "large_blend_z_rgb565",
                 host_bench_crc::<workloads::BlendBench>(&workloads::LARGE_BLEND_CMDS),
@@ -577,6 +585,11 @@ fn report(reports: &[BoardResult]) -> String {
         (
             "Gouraud + Z + edge AA (eq. 8) on every edge",
             "gouraud_z_edge_aa_rgb565",
+            tri_px,
+        ),
+        (
+            "Gouraud + Z + area sampling (α, seed 001 §IV.5) on every edge",
+            "gouraud_z_area_aa_rgb565",
             tri_px,
         ),
         ("Gouraud + Z + window ID", "gouraud_z_wid_rgb565", tri_px),

@@ -31,6 +31,12 @@ fn edges_match_golden() {
     check("edges");
 }
 
+/// Area sampling through the α-channel (seed 001 §IV.5).
+#[test]
+fn area_matches_golden() {
+    check("area");
+}
+
 #[test]
 fn ruf_matches_golden() {
     check("ruf");

@@ -233,10 +233,14 @@ pub const fn ss_bits(m: u32, c: u32, z: u32) -> u32 {
 }
 
 /// The coverage state of a tile's pixels ([`crate::tile::Tile`]'s sixth
-/// type parameter): none, the RUF buffer, or supersampling.
+/// type parameter): none, the RUF buffer, supersampling, or area sampling
+/// through the α-channel ([`crate::area::AreaAa`], no plane).
 pub trait AaMode: 'static {
     /// Samples per pixel; 0 without coverage antialiasing.
     const SAMPLES: usize;
+    /// Whether triangles' flagged edges are area-sampled
+    /// ([`crate::area`]); compiled out where `false`.
+    const AREA: bool = false;
     /// The sample positions.
     type Pattern: SamplePattern;
     /// Storage for `8 N` pixels (`()` for none).

@@ -9,12 +9,15 @@
 //!   (seed 003 eqs. 4, 7, 8);
 //! - `texmap`: texture coordinates along a span, affine, quadratic (the
 //!   RE's) or divided per pixel (seed 001 §IV.3);
+//! - [`area`]: exact pixel coverage by a triangle's flagged edges, the
+//!   RE's area-sampling antialiasing through the α-channel (seed 001 §IV.5);
 //! - [`coverage`]: sample patterns, coverage masks and the RUF buffer
 //!   (seed 000 eqs. 1-3, 6, 7).
 //!
 //! The fragments go on to the fragment stage ([`crate::fragment`]) through
 //! the tile's drawing code ([`crate::tile`]).
 
+pub mod area;
 pub mod coverage;
 pub mod line;
 pub(crate) mod span;

@@ -10,8 +10,10 @@
 //!
 //! - `u = s / q`, `v = t / q` (perspective) or `u`, `v` themselves
 //!   (affine), 32.32 texels;
-//! - the quadratic mode cuts the span into *segments* of [`SEGMENT`]
-//!   pixels from `xr` (the last one shorter) and per segment of `m` pixels
+//! - the quadratic mode cuts the span into *segments* at the screen
+//!   columns that are multiples of [`SEGMENT`] (so a tile whose side and
+//!   origin are multiples of it meets one segment a row; the first and last
+//!   of a span shorter) and per segment of `m` pixels
 //!   steps the quadratic `f(k) = f0 + B k + A k^2` through the exact
 //!   `f(0)`, `f(m/2)`, `f(m)` as `f += d; d += dd` with
 //!   `dd = 2A = 4 c / m^2`, `d(0) = A + B = 2 c / m^2 + (f(m) - f(0) - 2 c) / m`,
@@ -75,7 +77,21 @@ pub(crate) struct TexSpan {
     next: i64,
     end: (i64, i64),
     n: i64,
+    /// `xr` modulo [`SEGMENT`]: where the screen's segment grid falls.
+    phase: i64,
 }
+
+/// `1/m` for the segment lengths `m` in `1..SEGMENT` (a partial segment at a
+/// span's ends), computed at compile time: no division per segment.
+const BY_M: [Divisor; SEGMENT as usize] = {
+    let mut t = [Divisor::new(1); SEGMENT as usize];
+    let mut m = 1;
+    while m < SEGMENT as usize {
+        t[m] = Divisor::new(m as i64);
+        m += 1;
+    }
+    t
+};
 
 impl TexSetup {
     pub(crate) fn new<Ln: Lanes, Tn: EdgeInt>(
@@ -173,7 +189,8 @@ impl TexSetup {
                 s.v[0] = self.a[1];
             }
             PERSPECTIVE_QUADRATIC => {
-                let first = k & !(SEGMENT - 1);
+                s.phase = row.xr & (SEGMENT - 1);
+                let first = (((k + s.phase) & !(SEGMENT - 1)) - s.phase).max(0);
                 s.end = self.uv::<true>(self.at(e, 2 * first));
                 self.segment(&mut s, first);
                 advance(&mut s.u, k - first);
@@ -196,7 +213,7 @@ impl TexSetup {
     /// whose exact start coordinates are `s.end`.
     #[inline(never)]
     fn segment(&self, s: &mut TexSpan, first: i64) {
-        let m = SEGMENT.min(s.n - first);
+        let m = (SEGMENT - ((first + s.phase) & (SEGMENT - 1))).min(s.n - first);
         let p0 = s.end;
         let (pm, p1) = if m > 0 {
             (
@@ -219,9 +236,9 @@ impl TexSetup {
                     r(4 * c, 2 * SEGMENT_BITS),
                 )
             } else {
-                // One reciprocal for the segment; `/ m^2` as `/ m` twice
-                // (rounded twice: within 2^-31 texel of one rounding).
-                let by_m = Divisor::new(m);
+                // `/ m^2` as `/ m` twice (rounded twice: within 2^-31
+                // texel of one rounding).
+                let by_m = BY_M[m as usize];
                 let sq = |x: i64| by_m.round(by_m.round(x));
                 (sq(2 * c) + by_m.round(f1 - f0 - 2 * c), sq(4 * c))
             };

@@ -4,7 +4,7 @@
 //! print.
 
 use crate::workloads::{
-    self, EDGE_AA_CMDS, FILL_CMDS, LARGE_BLEND_CMDS, LARGE_QUAD_CMDS, LARGE_TEX_CMDS,
+    self, AREA_AA_CMDS, EDGE_AA_CMDS, FILL_CMDS, LARGE_BLEND_CMDS, LARGE_QUAD_CMDS, LARGE_TEX_CMDS,
     LARGE_TRIANGLE_CMDS, LINE_CMDS, TRIANGLE_CMDS, WU_LINE_CMDS,
 };
 use crate::{run_scene, Clock, SceneRun};
@@ -187,12 +187,27 @@ fn bench_one<C: TileConfig>(
     }
 }
 
+/// Prints the area-sampling workload (seed 001 §IV.5: the small triangles
+/// with every edge flagged, [`workloads::AreaAaBench`]). A feature of its
+/// own (`bench_area`): on the micro:bit it is a build of its own, since the
+/// other workloads fill the 256 KB of flash.
+pub fn report_area_bench(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt::Result {
+    bench_one::<workloads::AreaAaBench>(
+        "gouraud_z_area_aa_rgb565",
+        &AREA_AA_CMDS,
+        Via::Ours,
+        out,
+        clock,
+    )
+}
+
 /// Prints `bench NAME ticks T` for each workload: flat fill; Gouraud
 /// alone, with Z, with Z and window ID, and with those and 8x8 dither (all
 /// RGB565); large Gouraud triangles alone, with Z, and with Z, window ID
 /// and dither; the same translucent (alpha-blended, with Z); textured in
 /// perspective, affine, quadratic and exact; and with Z
-/// and every edge antialiased; the same triangles through `embedded-graphics`' `Triangle`
+/// and every edge antialiased (seed 003's edges, and area sampling through
+/// the α-channel); the same triangles through `embedded-graphics`' `Triangle`
 /// fill; lines, Bresenham and two-point (Wu) antialiased, and the same
 /// lines through `embedded-graphics`' `Line`.
 pub fn report_benches(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt::Result {

@@ -30,6 +30,10 @@ pub static TRIANGLE_CMDS: [Command; TRIANGLES] = TRIANGLE_CMDS_CONST;
 /// The same triangles followed by all their edges, antialiased (seed 003
 /// eq. 8): what edge antialiasing adds, at its most (every edge).
 pub static EDGE_AA_CMDS: [Command; 4 * TRIANGLES] = with_edges();
+/// The same triangles with every edge flagged for area sampling (seed 001
+/// §IV.5, [`AreaAaBench`]): what the RE's antialiasing through the
+/// α-channel adds, at its most.
+pub static AREA_AA_CMDS: [Command; TRIANGLES] = with_edge_flags();
 /// Large Gouraud triangles: [`LARGE_TRIANGLES`] / 2 pairs, each pair
 /// splitting the whole tile along a diagonal, random colours, each pair
 /// nearer than the last (every pixel passes the Z test and is stored: the
@@ -232,6 +236,29 @@ const fn with_edges() -> [Command; 4 * TRIANGLES] {
 }
 
 const TRIANGLE_CMDS_CONST: [Command; TRIANGLES] = triangles();
+
+const fn with_edge_flags() -> [Command; TRIANGLES] {
+    let mut out = TRIANGLE_CMDS_CONST;
+    let mut i = 0;
+    while i < TRIANGLES {
+        if let Command::Triangle { v, state } = TRIANGLE_CMDS_CONST[i] {
+            out[i] = Command::Triangle {
+                v: [
+                    v[0].with_edge_flag(true),
+                    v[1].with_edge_flag(true),
+                    v[2].with_edge_flag(true),
+                ],
+                state,
+            };
+        }
+        i += 1;
+    }
+    out
+}
+
+/// The tile configuration of the area-sampling workload ([`AREA_AA_CMDS`]):
+/// the Gouraud + Z workload's with area sampling compiled in.
+pub type AreaAaBench = Planes<Rgb565Format, Depth16, NoWid, NoDither, AreaAa>;
 
 const fn fills() -> [Command; FILLS] {
     let mut out = [PLACEHOLDER; FILLS];
