@@ -95,6 +95,7 @@ pub mod frame;
 pub mod geometry;
 pub mod texture;
 pub mod tile;
+pub mod volume;
 
 // Beside the pipeline.
 pub mod hash;

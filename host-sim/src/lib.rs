@@ -20,6 +20,7 @@ pub mod render;
 pub use tilerast_fw::rng;
 pub mod scene;
 pub mod texscene;
+pub mod volume;
 
 pub use display::PngDisplay;
 pub use error::{Error, Location, Result};

@@ -386,7 +386,7 @@ where
 /// The frame and a boxed tile of `G` groups for `cfg`, the tile shrunk
 /// until it fits (the output does not depend on the tiling).
 #[allow(clippy::type_complexity)]
-fn frame_and_tile<C: TileConfig, const G: usize>(
+pub(crate) fn frame_and_tile<C: TileConfig, const G: usize>(
     cfg: &Config,
 ) -> Result<(Frame, Box<Tile<G, C>>), Error> {
     let (mut tw, mut th) = cfg.tile;
@@ -559,17 +559,7 @@ where
     let mut depth = vec![u16::MAX; (w * h) as usize];
     let stats = frame
         .render_binned(&mut tile, &mut *bins, cmds, |t| {
-            let a = t.area();
-            for y in a.y..a.y + a.h as i32 {
-                for x in a.x..a.x + a.w as i32 {
-                    let i = (y as u32 * w + x as u32) as usize;
-                    let r = t.raw(x, y).expect("inside the tile");
-                    raw[i] = r;
-                    let c = Rgb888::from(C::Format::to_color(r));
-                    image.pixels[i] = [c.r(), c.g(), c.b()];
-                    depth[i] = t.depth(x, y).expect("inside the tile");
-                }
-            }
+            copy_tile(t, &mut image, &mut raw, &mut depth);
             Ok::<(), core::convert::Infallible>(())
         })
         .map_err(Error::from)?;
@@ -581,6 +571,29 @@ where
         stats,
         ns_per_pixel: times.get(times.len() / 2).copied(),
     })
+}
+
+/// Copies a finished tile into the frame's image, packed pixels and depth
+/// (all `image.width` wide).
+pub(crate) fn copy_tile<C: TileConfig, const G: usize>(
+    t: &Tile<G, C>,
+    image: &mut Image,
+    raw: &mut [u32],
+    depth: &mut [u16],
+) where
+    Rgb888: From<<C::Format as PixelFormat>::Color>,
+{
+    let (a, w) = (t.area(), image.width);
+    for y in a.y..a.y + a.h as i32 {
+        for x in a.x..a.x + a.w as i32 {
+            let i = (y as u32 * w + x as u32) as usize;
+            let r = t.raw(x, y).expect("inside the tile");
+            raw[i] = r;
+            let c = Rgb888::from(C::Format::to_color(r));
+            image.pixels[i] = [c.r(), c.g(), c.b()];
+            depth[i] = t.depth(x, y).expect("inside the tile");
+        }
+    }
 }
 
 use embedded_graphics_core::pixelcolor::RgbColor;

@@ -91,6 +91,9 @@
 //!
 //! Every command takes an optional `window` (default 0). Errors name the file,
 //! the line and the problem.
+//!
+//! A `[volume]` table ([`crate::volume`] lists its keys) draws a density
+//! volume over the commands, through the core's volume stage.
 
 use crate::error::{Error, Location, Result};
 use crate::mesh::{self, MeshSpec, MeshStats};
@@ -109,6 +112,7 @@ struct SceneFile {
     window: Vec<toml::Spanned<WindowSpec>>,
     #[serde(default)]
     command: Vec<toml::Spanned<CommandSpec>>,
+    volume: Option<toml::Spanned<crate::volume::VolumeSpec>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -320,6 +324,8 @@ pub struct Scene {
     /// How textured triangles are drawn (`[screen] texturing`, default
     /// quadratic; `none` draws their shade).
     pub texturing: crate::render::TexKind,
+    /// The `[volume]`, drawn over the commands (seed 002).
+    pub volume: Option<crate::volume::VolumeScene>,
     /// Commands before the antialiased edges.
     solid_commands: usize,
     /// Every edge that edge antialiasing can draw (triangles' edges, meshes'
@@ -798,7 +804,19 @@ impl Scene {
             };
             commands.push(cmd);
         }
+        let volume = match &file.volume {
+            None => None,
+            Some(v) => {
+                let span = v.span();
+                let spec = v.get_ref().clone();
+                Some(
+                    crate::volume::VolumeScene::load(spec, base)
+                        .map_err(|e| invalid(lines.of(span.start), format!("[volume] {e}")))?,
+                )
+            }
+        };
         let mut scene = Scene {
+            volume,
             name: "scene".into(),
             config,
             solid_commands: commands.len(),
@@ -827,6 +845,17 @@ impl Scene {
     /// mode ([`crate::render::render_textured`]; without textured
     /// commands, [`crate::render::render`]).
     pub fn render(&self) -> Result<crate::render::Rendered> {
+        if let Some(v) = &self.volume {
+            let run = v.run();
+            return Ok(crate::volume::render(
+                &self.config,
+                &self.commands,
+                v,
+                run,
+                &v.spec.lights,
+            )?
+            .0);
+        }
         let textured = self
             .commands
             .iter()

@@ -27,3 +27,4 @@ pub mod phong;
 pub mod ruf;
 pub mod texture;
 pub mod tradeoff;
+pub mod volume;

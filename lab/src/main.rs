@@ -100,6 +100,25 @@ enum Cmd {
         #[arg(long, default_value = "reports/texture.png")]
         image: PathBuf,
     },
+    /// Volume rendering with normal blending against per-slice shading
+    /// (seed 002): the Table 2 analogue (phase I and II against volume and
+    /// viewport size), the equality of §4.2 with its rounding bound, and
+    /// the figures (normals, two lights from one composite, two transfer
+    /// functions). Run from the repository root, in release.
+    VolumeReport {
+        /// Timed renders per measurement; the median is reported.
+        #[arg(long, default_value_t = 3)]
+        runs: usize,
+        /// Markdown output.
+        #[arg(short, long, default_value = "reports/volume.md")]
+        output: PathBuf,
+        /// Chart: phase I, phase II and the baseline per dataset.
+        #[arg(long, default_value = "reports/volume_chart.png")]
+        chart: PathBuf,
+        /// Figures.
+        #[arg(long, default_value = "reports/volume.png")]
+        image: PathBuf,
+    },
     /// Sweep every knob (colour and Z fraction bits, depth bits, sub-pixel
     /// bits, dither per format, antialiasing of solids, line mode) on a
     /// fixed set of scenes and measure error and cost: Markdown, CSV and a
@@ -177,6 +196,21 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             texture::chart(&rows)?.save_png(&chart)?;
             texture::pictures()?.save_png(&image)?;
             let md = texture::report(&rows, &chart, &image);
+            std::fs::write(&output, &md).map_err(|e| format!("{}: {e}", output.display()))?;
+            print!("{md}");
+        }
+        Cmd::VolumeReport {
+            runs,
+            output,
+            chart,
+            image,
+        } => {
+            use tilerast_lab::volume;
+            let sets = volume::datasets(std::path::Path::new("."))?;
+            let rows = volume::run(&sets, runs.max(1))?;
+            volume::chart(&rows)?.save_png(&chart)?;
+            volume::pictures(&sets)?.save_png(&image)?;
+            let md = volume::report(&rows, runs.max(1), &chart, &image);
             std::fs::write(&output, &md).map_err(|e| format!("{}: {e}", output.display()))?;
             print!("{md}");
         }

@@ -12,6 +12,7 @@
 //! | [`scene`] | scene-file text | parse errors, not panics; a parsed scene renders and survives the wire round trip |
 //! | [`obj`] | OBJ text | every index in range; the mesh builds and renders |
 //! | [`mesh()`] | a model-space mesh and camera parameters | parse and draw errors, not panics; every emitted triangle valid; keys increase and replay to the same commands; tiling changes nothing |
+//! | [`volume()`] | a density volume, transfer points, camera and lights | slicing errors, not panics; tiling changes nothing; normal blending equals per-slice shading within the rounding bound (one colour) |
 
 use crate::{config, random_command, Rng};
 use tilerast::prelude::*;
@@ -428,4 +429,126 @@ fn mesh_frame<S: tilerast::geometry::Real>(
     let cmds: Vec<Command> = keyed.into_iter().map(|k| k.1).collect();
     assert_eq!(again, cmds, "replay by key gives the walked commands");
     Some(cmds)
+}
+
+/// A density volume drawn by the volume stage (seed 002): the first 16
+/// bytes choose the sides (2..=9 each), the back end, the normals, the
+/// rotation, the eye distance, the slice count, two transfer points and a
+/// light; the rest are densities (repeated to fill the volume). Slicing
+/// never panics (overflow checks on) and fails only with documented
+/// errors; tiles change no pixel; with one colour, normal blending and
+/// per-slice shading agree within [`tilerast_sim::volume::equality_bound`].
+pub fn volume(data: &[u8]) -> bool {
+    use tilerast::geometry::Fx;
+    if data.len() < 17 {
+        return false;
+    }
+    let (p, bytes) = data.split_at(16);
+    let dims = [p[0], p[1], p[2]].map(|b| 2 + (b % 8) as u16);
+    let n = dims.iter().map(|&d| d as usize).product::<usize>();
+    let density: Vec<u8> = bytes.iter().copied().cycle().take(n).collect();
+    if p[3] & 1 == 0 {
+        volume_frames::<f32>(&density, dims, p)
+    } else {
+        volume_frames::<Fx>(&density, dims, p)
+    }
+}
+
+fn volume_frames<S: tilerast::geometry::Real>(density: &[u8], dims: [u16; 3], p: &[u8]) -> bool {
+    use tilerast::geometry::*;
+    use tilerast::volume::*;
+    let Ok(vol) = Volume::new(density, dims) else {
+        panic!("sides 2..=9 and the right length are a valid volume");
+    };
+    let mut normals = vec![0u8; 3 * density.len()];
+    vol.compute_normals(&mut normals)
+        .expect("room for the normals");
+    let vol = if p[3] & 2 == 0 {
+        vol.with_normals(&normals).expect("3 bytes a voxel")
+    } else {
+        vol
+    };
+    let q = |v: i32| S::from_q(v as i64, 4);
+    let deg = |b: u8| Angle::degrees(b as i32 * 360 / 256);
+    let model = Mat4::<S>::rotation_z(deg(p[4]))
+        .mul(&Mat4::rotation_y(deg(p[5])))
+        .mul(&Mat4::rotation_x(deg(p[6])));
+    let eye = q(2 + p[7] as i32); // 1/8 .. 16 units: inside the box too
+    let Ok(view) = Mat4::look_at([q(0), q(0), eye], [q(0); 3], [q(0), q(16), q(0)]) else {
+        return false;
+    };
+    let Ok(proj) = Mat4::perspective(
+        Angle::degrees(20 + p[8] as i32 % 120),
+        S::ONE,
+        q(1),
+        eye + q(32),
+    ) else {
+        return false;
+    };
+    let slices = 1 + (p[9] % 40) as u16;
+    let c = Rgb::new(200, 180, 90);
+    let (d0, d1) = (p[10].min(254), p[11].max(p[10].min(254) + 1));
+    let Ok(tf) = Transfer::from_points(&[TfPoint::new(d0, p[12], c), TfPoint::new(d1, p[13], c)])
+    else {
+        panic!("two increasing points are a transfer function");
+    };
+    let l = [p[14] as i32 - 128, p[15] as i32 - 128, 64].map(|v| S::from_q(v as i64, 6));
+    let Ok(lights) = VolumeLights::new(&model, &[(l, S::from_q(3, 2))], S::from_q(1, 2)) else {
+        return false;
+    };
+    let screen = Rect::new(0, 0, 24, 24);
+    let view = match VolumeView::<'_, 40>::new(vol, &tf, &model, &view, &proj, screen, slices) {
+        Ok(v) => v,
+        Err(Error::Degenerate) => return false,
+        Err(e) => panic!("slicing failed with {e:?}"),
+    };
+    type T = Tile<{ groups(24, 24) }, Planes<Rgb888Format, Depth16>>;
+    fn draw<M: Compositor, const K: usize>(
+        view: &VolumeView<'_, K>,
+        comp: &M,
+        lights: &VolumeLights,
+        big: bool,
+    ) -> (Vec<u32>, u32) {
+        let frame = if big {
+            T::frame::<24, 24>(24, 24)
+        } else {
+            T::frame::<8, 6>(24, 24)
+        }
+        .expect("a valid frame");
+        let mut tile = T::new();
+        let mut plane: Box<VolumePlane<{ groups(24, 24) }, M::Cell>> = Box::new(VolumePlane::new());
+        let mut out = vec![0u32; 24 * 24];
+        let mut blended = 0;
+        frame
+            .render_with(&mut tile, &[][..], |t| {
+                blended += plane.composite(t, view, comp).composited;
+                plane.shade(t, comp, lights);
+                let a = t.area();
+                for y in a.y..a.y + a.h as i32 {
+                    for x in a.x..a.x + a.w as i32 {
+                        out[(y * 24 + x) as usize] = t.raw(x, y).unwrap();
+                    }
+                }
+                Ok::<(), ()>(())
+            })
+            .expect("renders");
+        (out, blended)
+    }
+    let (a, blended) = draw(&view, &NormalBlending, &lights, true);
+    let (b, _) = draw(&view, &NormalBlending, &lights, false);
+    assert_eq!(a, b, "tiles changed the volume");
+    let (ps, _) = draw(&view, &PerSliceShading(&lights), &lights, true);
+    let l64 = l.map(|v| v.to_fixed(16).unwrap_or(0) as f64 / 65536.0);
+    let bound =
+        tilerast_sim::volume::equality_bound(&[[l64[0], l64[1], l64[2], 0.75]], 0.5, slices as u32);
+    for (x, y) in a.iter().zip(&ps) {
+        for sh in [0, 8, 16] {
+            let d = ((x >> sh) & 255).abs_diff((y >> sh) & 255);
+            assert!(
+                d as f64 <= bound,
+                "normal blending and per-slice differ by {d} > {bound:.2}"
+            );
+        }
+    }
+    blended > 0
 }

@@ -45,6 +45,9 @@ struct Report {
     spins: Vec<SpinLine>,
     /// The vertex stage alone, one per frame.
     geoms: Vec<GeomLine>,
+    /// The volume workload per mode: (prepare, setup, phase I, phase II,
+    /// samples, composited, crc).
+    volumes: BTreeMap<String, [u64; 7]>,
     stack_used: u64,
 }
 
@@ -181,6 +184,23 @@ fn parse(out: &str) -> Report {
                         .unwrap(),
                 });
             }
+            Some("volume") => {
+                assert!(!w.contains(&"error"), "{line}");
+                let num = |k: &str| field(&w, k).parse::<u64>().unwrap();
+                let crc = u64::from_str_radix(field(&w, "crc").trim_start_matches("0x"), 16);
+                r.volumes.insert(
+                    w[1].to_string(),
+                    [
+                        num("prepare"),
+                        num("setup"),
+                        num("phase1"),
+                        num("phase2"),
+                        num("samples"),
+                        num("composited"),
+                        crc.unwrap(),
+                    ],
+                );
+            }
             Some("stack_used") => r.stack_used = w[1].parse().unwrap(),
             _ => {}
         }
@@ -269,6 +289,32 @@ fn run(board: &str, elf: &Path) -> String {
 }
 
 /// Flash (`.vector_table` + `.text` + `.rodata`) and static RAM (`.data` + `.bss`) of an ELF.
+/// The volume workload on the host: what the board must print.
+fn host_volume() -> [tilerast_fw::volumes::VolumeRun; 2] {
+    use tilerast_fw::volumes::{run, VOXELS};
+    let mut density = vec![0u8; VOXELS];
+    let mut normals = vec![0u8; 3 * VOXELS];
+    run(
+        density.as_mut_slice().try_into().unwrap(),
+        normals.as_mut_slice().try_into().unwrap(),
+        &mut || 0,
+    )
+    .unwrap()
+}
+
+/// Whether an ELF has any function of the core's volume stage (mangled
+/// names hold the module path).
+fn has_volume_code(elf: &Path) -> bool {
+    use object::{Object, ObjectSymbol};
+    let data = std::fs::read(elf).unwrap();
+    let file = object::File::parse(&*data).unwrap();
+    let found = file.symbols().any(|s| {
+        s.name()
+            .is_ok_and(|n| n.contains("8tilerast6volume") || n.contains("11tilerast_fw7volumes"))
+    });
+    found
+}
+
 fn sizes(elf: &Path) -> (u64, u64) {
     use object::{Object, ObjectSection};
     let data = std::fs::read(elf).unwrap();
@@ -412,7 +458,9 @@ fn firmware_output_is_bit_identical_to_the_host() {
             "{board}: instruction counts differ between runs"
         );
         let full = sizes(&elf);
+        let full_volume = has_volume_code(&elf);
         let min_elf = build(board, &scenes, Some("ssd1306"));
+        let min_volume = has_volume_code(&min_elf);
         let min_run = parse(&run(board, &min_elf));
         assert_eq!(
             min_run.scenes["ssd1306"].crc, r.scenes["ssd1306"].crc,
@@ -507,6 +555,28 @@ fn firmware_output_is_bit_identical_to_the_host() {
             r.geoms.len(),
             r.geoms[0].backend
         );
+        // The volume (the MPS2 only: 128 KB of volume in RAM), both modes
+        // bit for bit; a build without it carries none of the volume stage.
+        if board == "mps2-an386" {
+            let host = host_volume();
+            for (mode, h) in ["normal_blending", "per_slice"].iter().zip(host) {
+                let v = r
+                    .volumes
+                    .get(*mode)
+                    .unwrap_or_else(|| panic!("{board}: no volume {mode}:\n{out}"));
+                assert_eq!(
+                    (v[4], v[5], v[6] as u32),
+                    (h.stats.samples as u64, h.stats.composited as u64, h.crc),
+                    "{board}: volume {mode} differs from the host's"
+                );
+                println!("{board:>10} volume {mode}: CRC 0x{:08x} = host", h.crc);
+            }
+            assert!(full_volume, "{board}: the full build has no volume code?");
+            assert!(
+                !min_volume,
+                "{board}: a build without the volume feature carries volume code"
+            );
+        }
         reports.push(BoardResult {
             full,
             minimal: sizes(&min_elf),
@@ -782,6 +852,43 @@ fn report(reports: &[BoardResult]) -> String {
                 ticks as f64 * b.instr_per_tick / frames as f64 / 1e6
             );
         }
+    }
+    for b in &boards {
+        if b.volumes.is_empty() {
+            continue;
+        }
+        use tilerast_fw::volumes::{VOL_SCREEN, VOL_SIDE, VOL_SLICES};
+        let k = |t: u64| t as f64 * b.instr_per_tick;
+        md += &format!(
+            "\n## Volume rendering ({})\n\nThe seed-002 workload (`targets/common/src/volumes.rs`): the \
+             procedural sphere, {VOL_SIDE}^3, made and its normals quantised on the device, {VOL_SLICES} \
+             view-aligned slices into a {VOL_SCREEN}x{VOL_SCREEN} RGB565 frame (4x4 dither, 32x32 tiles, \
+             normal plane 14 KB). Phase I: slice, classify, composite; phase II: shade. Both modes' \
+             frames equal the host's (CRC). `reports/volume.md` has the host's size series.\n\n\
+             | mode | samples | blended | phase I instr | per sample | phase II instr | per pixel | total instr |\n\
+             | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+            b.board
+        );
+        let px = (VOL_SCREEN as f64).powi(2);
+        let mut prep = (0, 0);
+        for (mode, v) in &b.volumes {
+            prep = (v[0], v[1]);
+            md += &format!(
+                "| {mode} | {} | {} | {:.0} | {:.1} | {:.0} | {:.1} | {:.0} |\n",
+                v[4],
+                v[5],
+                k(v[2]),
+                k(v[2]) / v[4].max(1) as f64,
+                k(v[3]),
+                k(v[3]) / px,
+                k(v[1] + v[2] + v[3])
+            );
+        }
+        md += &format!(
+            "\nOnce: making the sphere and its normals {:.2} M instructions; slicing {:.0} instructions a frame.\n",
+            k(prep.0) / 1e6,
+            k(prep.1)
+        );
     }
     md += "\n## Flash and RAM\n\nFlash is `.vector_table` + `.text` + `.rodata` (the scenes are in `.rodata`); \
            static RAM is `.data` + `.bss`; the stack high-water mark is measured by the firmware \

@@ -10,13 +10,14 @@ use tilerast_tests::{fuzz, repo, Rng};
 
 type Body = fn(&[u8]) -> bool;
 
-const TARGETS: [(&str, Body); 6] = [
+const TARGETS: [(&str, Body); 7] = [
     ("wire", fuzz::wire),
     ("commands", fuzz::commands),
     ("tile_api", fuzz::tile_api),
     ("scene", fuzz::scene),
     ("obj", fuzz::obj),
     ("mesh", fuzz::mesh),
+    ("volume", fuzz::volume),
 ];
 
 /// Mutations per stored input (more with `FUZZ_REPLAY_MUTATIONS`).
@@ -89,6 +90,7 @@ corpus_tests! {
     scene_corpus: 3;
     obj_corpus: 4;
     mesh_corpus: 5;
+    volume_corpus: 6;
 }
 
 #[test]

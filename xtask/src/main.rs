@@ -13,7 +13,9 @@
 //!   the simulator's quality reports (`aa`, `ruf`, `phong`, `texture`) and the speed-against-
 //!   accuracy sweep (`reports/tradeoff.*`).
 //! - `report`: runs the firmware under QEMU, writes `reports/targets.md`
-//!   (instructions per pixel on Cortex-M0/M4, flash, RAM, stack).
+//!   (instructions per pixel on Cortex-M0/M4, flash, RAM, stack, the
+//!   volume workload), then the host frame timings (`reports/frames.md`)
+//!   and the volume-rendering report (`reports/volume.md`).
 //! - `fuzz [--seconds N] [TARGET...]`: runs every cargo-fuzz target of
 //!   `fuzz/` (or those named) for N seconds each (default 60), starting from
 //!   `fuzz/seeds/<target>` and `fuzz/corpus/<target>`, growing and then
@@ -403,22 +405,22 @@ fn report() -> Result<(), String> {
         std::fs::read_to_string(&path).map_err(|e| e.to_string())?
     );
     // Host frames (tiled, one tile, f64 reference) and fills against the
-    // peers, timed in one run: `reports/frames.md`.
-    run(
-        "cargo",
-        &[
-            "run",
-            "--release",
-            "-p",
-            "tilerast-lab",
-            "--",
-            "frames",
-            "scenes/teapot.toml",
-            "scenes/demo.toml",
-            "-o",
-            "reports/frames.md",
-        ],
-    )
+    // peers, timed in one run: `reports/frames.md`; then volume rendering,
+    // normal blending against per-slice shading (seed 002):
+    // `reports/volume.md`, its chart and figures.
+    let frames = [
+        "frames",
+        "scenes/teapot.toml",
+        "scenes/demo.toml",
+        "-o",
+        "reports/frames.md",
+    ];
+    for lab in [&frames[..], &["volume-report"]] {
+        let mut args = vec!["run", "--release", "-p", "tilerast-lab", "--"];
+        args.extend_from_slice(lab);
+        run("cargo", &args)?;
+    }
+    Ok(())
 }
 
 fn demo() -> Result<(), String> {
@@ -439,7 +441,9 @@ fn demo() -> Result<(), String> {
 }
 
 /// The cargo-fuzz targets (`fuzz/fuzz_targets/*.rs`).
-const FUZZ_TARGETS: [&str; 6] = ["wire", "commands", "tile_api", "scene", "obj", "mesh"];
+const FUZZ_TARGETS: [&str; 7] = [
+    "wire", "commands", "tile_api", "scene", "obj", "mesh", "volume",
+];
 
 fn fuzz(args: &[String]) -> Result<(), String> {
     let mut seconds = 60u64;

@@ -73,6 +73,7 @@ mod real;
 
 pub use math::{cross, dot, normalize, sub, Mat4, Vec3};
 pub use mesh::{Group, Material, Mesh, MeshData, CUBE_BYTES};
+pub(crate) use real::isqrt;
 pub use real::{Angle, Fx, Real};
 
 use crate::command::{Command, QuadVertex, State, Vertex};

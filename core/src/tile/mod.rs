@@ -254,6 +254,20 @@ where
         self.put_packed::<MASKED>(i, raw, mask);
     }
 
+    /// Composites a premultiplied colour `lanes` (output scale,
+    /// [`COLOR_FRAC`] fraction bits) over pixel `i` at screen `(x, y)`,
+    /// keeping `keep` (Q1.15) of the old colour: `C = lanes + C_old keep`,
+    /// then dither and pack. The volume stage's last step.
+    #[inline]
+    pub(crate) fn over(&mut self, i: usize, x: u32, y: u32, lanes: F::Lanes, keep: i32) {
+        let old = F::unpack(self.color.get(i));
+        let bias = round_bias::<D>();
+        let v = lanes.zip(old, |p, o| {
+            p + ((o as i64 * keep as i64) >> 15) as i32 + bias
+        });
+        self.store::<false>(i, x, y, v, F::MASK_ALL);
+    }
+
     /// The end of [`Self::store`] for an already packed value (flat fills
     /// and overlays, which have nothing to dither): plane mask, store.
     #[inline(always)]

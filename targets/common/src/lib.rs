@@ -16,6 +16,8 @@
 //!   tiles that changed), with the bytes it saves.
 //! - [`spin`]: a mesh rotating under the on-device geometry stage, frame
 //!   by frame, with the vertex stage and the raster timed apart.
+//! - [`volumes`]: a density volume drawn by normal blending and by
+//!   per-slice shading (seed 002), phases timed apart.
 //! - [`rng`]: the deterministic PRNG those workloads (and the host tests)
 //!   use.
 //! - [`report`]: the lines a firmware prints (scene CRCs, workload ticks),
@@ -32,6 +34,7 @@ pub mod board;
 pub mod report;
 pub mod rng;
 pub mod spin;
+pub mod volumes;
 pub mod workloads;
 
 use embedded_graphics::{

@@ -132,6 +132,28 @@ pub fn report_phases<K: SceneKind, const N: usize, const BC: usize, const BT: us
     }
 }
 
+/// Prints `volume MODE prepare P setup S phase1 A phase2 B samples N
+/// composited C crc X` for normal blending and per-slice shading
+/// ([`crate::volumes`]; 128 KB of volume on the stack).
+#[inline(never)]
+pub fn report_volume(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt::Result {
+    let mut density = [0u8; crate::volumes::VOXELS];
+    let mut normals = [0u8; 3 * crate::volumes::VOXELS];
+    match crate::volumes::run(&mut density, &mut normals, clock) {
+        Ok(runs) => {
+            for (mode, r) in ["normal_blending", "per_slice"].iter().zip(runs) {
+                writeln!(
+                    out,
+                    "volume {mode} prepare {} setup {} phase1 {} phase2 {} samples {} composited {} crc 0x{:08x}",
+                    r.prepare, r.setup, r.phase1, r.phase2, r.stats.samples, r.stats.composited, r.crc
+                )?;
+            }
+            Ok(())
+        }
+        Err(e) => writeln!(out, "volume error {e}"),
+    }
+}
+
 /// Prints `anim frames F tiles T sent_tiles S bytes_full B bytes_sent P ticks K`:
 /// the animated gauge with partial updates ([`crate::anim`]).
 #[inline(never)]
