@@ -40,6 +40,20 @@ pub const VOLUME_GROUPS: usize = 2048;
 /// Most slices a scene may ask for.
 pub const MAX_SLICES: usize = 1024;
 
+/// Largest side of a volume the simulator makes (sphere, resampling):
+/// 256^3 is 64 MB of densities and normals, the seed's largest.
+pub const MAX_MADE_SIDE: u16 = 256;
+
+fn made_side(n: u16) -> Result<()> {
+    if (2..=MAX_MADE_SIDE).contains(&n) {
+        Ok(())
+    } else {
+        Err(Error::Unsupported(format!(
+            "a made volume's side is 2..={MAX_MADE_SIDE}, not {n}"
+        )))
+    }
+}
+
 /// A density volume in memory, with its quantised normals.
 #[derive(Debug, Clone, PartialEq)]
 pub struct VolumeData {
@@ -65,8 +79,10 @@ impl VolumeData {
         })
     }
 
-    /// The seed's "small sphere", `n^3` ([`tilerast::volume::sphere`]).
+    /// The seed's "small sphere", `n^3` ([`tilerast::volume::sphere`]);
+    /// [`Error::Unsupported`] for `n` outside `2..=`[`MAX_MADE_SIDE`].
     pub fn sphere(n: u16) -> Result<Self> {
+        made_side(n)?;
         let mut d = vec![0u8; (n as usize).pow(3)];
         tilerast::volume::sphere(n, &mut d)?;
         Self::with_normals(d, [n; 3], [256; 3])
@@ -140,7 +156,9 @@ impl VolumeData {
 
     /// Resampled trilinearly to `n^3` voxels covering the same box (the
     /// spacing grows or shrinks per axis to keep the physical shape).
+    /// [`Error::Unsupported`] for `n` outside `2..=`[`MAX_MADE_SIDE`].
     pub fn resample(&self, n: u16) -> Result<Self> {
+        made_side(n)?;
         let [w, h, d] = self.dims.map(|v| v as usize);
         let at = |x: usize, y: usize, z: usize| self.density[x + w * (y + h * z)] as f64;
         let scale = |a: usize| (self.dims[a] as f64 - 1.0) / (n as f64 - 1.0);
@@ -337,8 +355,7 @@ impl VolumeScene {
                 ));
             };
             match spec.size {
-                Some(n) if n >= 2 => d.resample(n).map_err(e)?,
-                Some(n) => return Err(format!("size = {n} must be at least 2")),
+                Some(n) => d.resample(n).map_err(e)?,
                 None => d,
             }
         };

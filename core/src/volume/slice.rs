@@ -237,13 +237,22 @@ pub(crate) fn slice<S: Real, const K: usize>(
         }
         // Pixels whose centres can be inside, one pixel of margin, cut to
         // the viewport.
-        let px = |v: S| (v - S::HALF).to_fixed(0).ok_or(Error::Degenerate);
-        let (x0, y0) = (px(lo.0)? - 1, px(lo.1)? - 1);
-        let (x1, y1) = (px(hi.0)? + 2, px(hi.1)? + 2);
-        let box_ = Rect::new(x0, y0, (x1 - x0) as u32, (y1 - y0) as u32);
-        let Some(bounds) = box_.intersect(&viewport) else {
-            continue;
+        // (In i64, cut to the viewport before it is a `Rect`: a corner
+        // near the camera plane projects anywhere in `i32`.)
+        let px = |v: S| {
+            (v - S::HALF)
+                .to_fixed(0)
+                .map(i64::from)
+                .ok_or(Error::Degenerate)
         };
+        let (vx0, vy0) = (viewport.x as i64, viewport.y as i64);
+        let (vx1, vy1) = (vx0 + viewport.w as i64, vy0 + viewport.h as i64);
+        let (x0, y0) = ((px(lo.0)? - 1).max(vx0), (px(lo.1)? - 1).max(vy0));
+        let (x1, y1) = ((px(hi.0)? + 2).min(vx1), (px(hi.1)? + 2).min(vy1));
+        if x0 >= x1 || y0 >= y1 {
+            continue;
+        }
+        let bounds = Rect::new(x0 as i32, y0 as i32, (x1 - x0) as u32, (y1 - y0) as u32);
         // Screen to eye on the plane: invert the 2x2 of (x, y) -> screen.
         let m = [[a * p[0][0], a * p[0][1]], [-(b * p[1][0]), -(b * p[1][1])]];
         let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
