@@ -93,6 +93,7 @@ pub use fragment::dither;
 pub mod config;
 pub mod frame;
 pub mod geometry;
+pub mod occlusion;
 pub mod texture;
 pub mod tile;
 pub mod volume;

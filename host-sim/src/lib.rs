@@ -7,6 +7,7 @@
 //! ([`metrics`]). [`PngDisplay`] is a `DrawTarget` that writes PNGs, so a
 //! firmware's own drawing code runs unchanged on the host.
 
+pub mod city;
 pub mod display;
 pub mod error;
 pub mod image;

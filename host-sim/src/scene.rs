@@ -94,6 +94,9 @@
 //!
 //! A `[volume]` table ([`crate::volume`] lists its keys) draws a density
 //! volume over the commands, through the core's volume stage.
+//!
+//! A `[city]` table ([`crate::city`] lists its keys) draws a frame of the
+//! occlusion-culling city instead, culled as the table says.
 
 use crate::error::{Error, Location, Result};
 use crate::mesh::{self, MeshSpec, MeshStats};
@@ -113,6 +116,7 @@ struct SceneFile {
     #[serde(default)]
     command: Vec<toml::Spanned<CommandSpec>>,
     volume: Option<toml::Spanned<crate::volume::VolumeSpec>>,
+    city: Option<toml::Spanned<crate::city::CitySpec>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -326,6 +330,8 @@ pub struct Scene {
     pub texturing: crate::render::TexKind,
     /// The `[volume]`, drawn over the commands (seed 002).
     pub volume: Option<crate::volume::VolumeScene>,
+    /// The `[city]`, drawn instead of the commands (seed 004).
+    pub city: Option<crate::city::CitySpec>,
     /// Commands before the antialiased edges.
     solid_commands: usize,
     /// Every edge that edge antialiasing can draw (triangles' edges, meshes'
@@ -815,8 +821,18 @@ impl Scene {
                 )
             }
         };
+        let city = match &file.city {
+            None => None,
+            Some(c) => {
+                let spec = c.get_ref().clone();
+                spec.check()
+                    .map_err(|e| invalid(lines.of(c.span().start), format!("[city] {e}")))?;
+                Some(spec)
+            }
+        };
         let mut scene = Scene {
             volume,
+            city,
             name: "scene".into(),
             config,
             solid_commands: commands.len(),
@@ -845,6 +861,9 @@ impl Scene {
     /// mode ([`crate::render::render_textured`]; without textured
     /// commands, [`crate::render::render`]).
     pub fn render(&self) -> Result<crate::render::Rendered> {
+        if let Some(c) = &self.city {
+            return Ok(crate::city::render(&self.config, c)?.0);
+        }
         if let Some(v) = &self.volume {
             let run = v.run();
             return Ok(crate::volume::render(

@@ -13,6 +13,8 @@
 //!   Phong (seed 001 §IV.2);
 //! - [`texture`]: affine, quadratic and exact perspective texturing
 //!   against the f64 mapping, by depth ratio (seed 001 §IV.3);
+//! - [`cull`]: occlusion culling (seed 004), the single pass against
+//!   stop-and-wait and CHC queries on the same city walks;
 //! - [`frames`]: whole frames (tiled, one tile, f64 reference) and filled
 //!   triangles against `embedded-graphics` and `tiny-skia`, timed in one run.
 //!
@@ -22,6 +24,7 @@
 
 pub mod aa;
 pub mod chart;
+pub mod cull;
 pub mod frames;
 pub mod phong;
 pub mod ruf;

@@ -105,6 +105,24 @@ enum Cmd {
     /// viewport size), the equality of §4.2 with its rounding bound, and
     /// the figures (normals, two lights from one composite, two transfer
     /// functions). Run from the repository root, in release.
+    /// Occlusion culling (seed 004): the single pass against stop-and-wait
+    /// and CHC occlusion queries and no culling, on the city walks (large
+    /// and small triangles): ACPF, the Table 1 improvements, thresholds and
+    /// block sizes. Run from the repository root, in release.
+    CullReport {
+        /// Frames of the camera path.
+        #[arg(long, default_value_t = 200)]
+        frames: u32,
+        /// Markdown output.
+        #[arg(short, long, default_value = "reports/cull.md")]
+        output: PathBuf,
+        /// Chart: ACPF per mode.
+        #[arg(long, default_value = "reports/cull_chart.png")]
+        chart: PathBuf,
+        /// Frames of each variant.
+        #[arg(long, default_value = "reports/cull.png")]
+        image: PathBuf,
+    },
     VolumeReport {
         /// Timed renders per measurement; the median is reported.
         #[arg(long, default_value_t = 3)]
@@ -196,6 +214,20 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             texture::chart(&rows)?.save_png(&chart)?;
             texture::pictures()?.save_png(&image)?;
             let md = texture::report(&rows, &chart, &image);
+            std::fs::write(&output, &md).map_err(|e| format!("{}: {e}", output.display()))?;
+            print!("{md}");
+        }
+        Cmd::CullReport {
+            frames,
+            output,
+            chart,
+            image,
+        } => {
+            use tilerast_lab::cull;
+            let rows = cull::run(frames.max(2))?;
+            cull::chart(&rows)?.save_png(&chart)?;
+            cull::pictures(frames.max(2))?.save_png(&image)?;
+            let md = cull::report(&rows, &chart, &image);
             std::fs::write(&output, &md).map_err(|e| format!("{}: {e}", output.display()))?;
             print!("{md}");
         }

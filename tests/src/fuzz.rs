@@ -13,6 +13,7 @@
 //! | [`obj`] | OBJ text | every index in range; the mesh builds and renders |
 //! | [`mesh()`] | a model-space mesh and camera parameters | parse and draw errors, not panics; every emitted triangle valid; keys increase and replay to the same commands; tiling changes nothing |
 //! | [`volume()`] | a density volume, transfer points, camera and lights | slicing errors, not panics; tiling changes nothing; normal blending equals per-slice shading within the rounding bound (one colour) |
+//! | [`occlusion()`] | object boxes, two cameras, a threshold | building, projecting and walking never panic; at threshold 0 every culling mode draws both frames exactly as no culling |
 
 use crate::{config, random_command, Rng};
 use tilerast::prelude::*;
@@ -551,4 +552,100 @@ fn volume_frames<S: tilerast::geometry::Real>(density: &[u8], dims: [u16; 3], p:
         }
     }
     blended > 0
+}
+
+/// Occlusion culling (seed 004): up to 24 boxes (each a cube placed by
+/// the input, possibly degenerate, huge or around the camera), a camera
+/// and a threshold. Oracles: building, projecting and walking never panic;
+/// with threshold 0 every mode draws both frames (the second with the
+/// first's history) exactly as no culling does; any threshold's counts
+/// stay consistent. Returns whether the frames were drawn.
+pub fn occlusion(data: &[u8]) -> bool {
+    use tilerast::geometry::*;
+    use tilerast::occlusion::*;
+    if data.len() < 8 {
+        return false;
+    }
+    let (p, rest) = data.split_at(8);
+    let n = (1 + p[0] as usize % 24).min(rest.len() / 6).max(1);
+    if rest.len() < 6 {
+        return false;
+    }
+    let mut bytes = [0u8; CUBE_BYTES];
+    let Ok(cube) = Mesh::cube(&mut bytes) else {
+        panic!("the cube encodes");
+    };
+    let s = |b: u8| (b as i8) as f32 / 8.0;
+    let items: Vec<(Mesh<'_>, Mat4<f32>)> = rest
+        .chunks_exact(6)
+        .take(n)
+        .map(|c| {
+            let size = [c[3], c[4], c[5]].map(|b| (b % 64) as f32 / 8.0);
+            let model = Mat4::translation([s(c[0]), s(c[1]), s(c[2])]).mul(&Mat4::scale(size));
+            (cube, model)
+        })
+        .collect();
+    let boxes: Vec<Aabb<f32>> = items.iter().map(|(m, t)| Aabb::of_mesh(m, t)).collect();
+    let Ok(tree) = KdTree::<f32, 64>::build(&boxes) else {
+        panic!("finite boxes within capacity build a tree");
+    };
+    let threshold = if p[1] & 1 == 0 { 0 } else { p[2] % 129 };
+    let eye0 = [s(p[3]), s(p[4]), s(p[5]) + 12.0];
+    type T = Tile<{ groups(16, 16) }, St7789Config>;
+    let frame = T::frame::<16, 16>(40, 32).expect("a valid frame");
+    let draw = |mode: CullMode,
+                culler: &mut Culler<f32, 64>,
+                eye: [f32; 3]|
+     -> Option<(Vec<u32>, CullStats)> {
+        let mut slots = vec![VertexSlot::EMPTY; 24 * items.len()];
+        let mut scene: Scene<'_, f32, 24> = Scene::new(&mut slots);
+        scene.set_camera(
+            Mat4::look_at(eye, [0.0, 0.0, 0.0], [0.0, 1.0, 0.0]).ok()?,
+            Mat4::perspective(Angle::degrees(30 + p[6] as i32 % 100), 1.25, 0.5, 40.0).ok()?,
+        );
+        scene.set_viewport(Rect::new(0, 0, 40, 32)).ok()?;
+        let mut objects = MeshObjects::new(&mut scene, &items, DrawOptions::default()).ok()?;
+        let (mut tile, mut hiz) = (T::new(), HiZ::<4, 3>::new());
+        let mut px = vec![0u32; 40 * 32];
+        let st = culler
+            .render(mode, &frame, &mut tile, &mut hiz, eye, &mut objects, |t| {
+                let a = t.area();
+                for y in a.y..a.y + a.h as i32 {
+                    for x in a.x..a.x + a.w as i32 {
+                        px[(y * 40 + x) as usize] = t.raw(x, y).unwrap_or(0);
+                    }
+                }
+                Ok::<(), ()>(())
+            })
+            .expect("rendering into a tile cannot fail");
+        assert!(st.nodes_culled <= st.nodes_visited && st.prims_culled <= st.prims_tested);
+        Some((px, st))
+    };
+    let eye1 = [eye0[0] + s(p[7]) / 4.0, eye0[1], eye0[2] - 1.0];
+    let mut off = Culler::new(tree.clone());
+    let Some(ref0) = draw(CullMode::Off, &mut off, eye0) else {
+        return false;
+    };
+    let Some(ref1) = draw(CullMode::Off, &mut off, eye1) else {
+        return false;
+    };
+    for mode in [CullMode::StopAndWait, CullMode::Chc, CullMode::SinglePass] {
+        let mut c = Culler::new(tree.clone());
+        c.set_threshold(threshold).expect("0..=128");
+        let f0 = draw(mode, &mut c, eye0).expect("the same camera as the reference");
+        let f1 = draw(mode, &mut c, eye1).expect("the same camera as the reference");
+        if threshold == 0 {
+            assert!(
+                f0.0 == ref0.0,
+                "{}: first frame differs from no culling",
+                mode.name()
+            );
+            assert!(
+                f1.0 == ref1.0,
+                "{}: second frame differs from no culling",
+                mode.name()
+            );
+        }
+    }
+    true
 }

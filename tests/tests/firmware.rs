@@ -48,6 +48,9 @@ struct Report {
     /// The volume workload per mode: (prepare, setup, phase I, phase II,
     /// samples, composited, crc).
     volumes: BTreeMap<String, [u64; 7]>,
+    /// The culled city per mode: (ticks, vertices, tested, culled, drawn,
+    /// commands, prims culled, reads, crc).
+    culls: BTreeMap<String, [u64; 9]>,
     stack_used: u64,
 }
 
@@ -201,6 +204,25 @@ fn parse(out: &str) -> Report {
                     ],
                 );
             }
+            Some("cull") => {
+                assert!(!w.contains(&"error"), "{line}");
+                let num = |k: &str| field(&w, k).parse::<u64>().unwrap();
+                let crc = u64::from_str_radix(field(&w, "crc").trim_start_matches("0x"), 16);
+                r.culls.insert(
+                    w[1].to_string(),
+                    [
+                        num("ticks"),
+                        num("vertices"),
+                        num("tested"),
+                        num("culled"),
+                        num("drawn"),
+                        num("commands"),
+                        num("prims_culled"),
+                        num("reads"),
+                        crc.unwrap(),
+                    ],
+                );
+            }
             Some("stack_used") => r.stack_used = w[1].parse().unwrap(),
             _ => {}
         }
@@ -312,6 +334,17 @@ fn has_volume_code(elf: &Path) -> bool {
         s.name()
             .is_ok_and(|n| n.contains("8tilerast6volume") || n.contains("11tilerast_fw7volumes"))
     });
+    found
+}
+
+/// Whether an ELF has any function of the core's occlusion stage.
+fn has_occlusion_code(elf: &Path) -> bool {
+    use object::{Object, ObjectSymbol};
+    let data = std::fs::read(elf).unwrap();
+    let file = object::File::parse(&*data).unwrap();
+    let found = file
+        .symbols()
+        .any(|s| s.name().is_ok_and(|n| n.contains("8tilerast9occlusion")));
     found
 }
 
@@ -459,8 +492,10 @@ fn firmware_output_is_bit_identical_to_the_host() {
         );
         let full = sizes(&elf);
         let full_volume = has_volume_code(&elf);
+        let full_occlusion = has_occlusion_code(&elf);
         let min_elf = build(board, &scenes, Some("ssd1306"));
         let min_volume = has_volume_code(&min_elf);
+        let min_occlusion = has_occlusion_code(&min_elf);
         let min_run = parse(&run(board, &min_elf));
         assert_eq!(
             min_run.scenes["ssd1306"].crc, r.scenes["ssd1306"].crc,
@@ -575,6 +610,54 @@ fn firmware_output_is_bit_identical_to_the_host() {
             assert!(
                 !min_volume,
                 "{board}: a build without the volume feature carries volume code"
+            );
+        }
+        // The culled city (the MPS2 only), every mode bit for bit as the
+        // host's, and every mode's frames equal to the unculled ones.
+        if board == "mps2-an386" {
+            let mut slots =
+                vec![tilerast::geometry::VertexSlot::EMPTY; tilerast_fw::city::FW_SLOTS];
+            for mode in tilerast::occlusion::CullMode::ALL {
+                let h = tilerast_fw::city::run_fw(mode, &mut slots, &mut || 0).unwrap();
+                let c = r
+                    .culls
+                    .get(mode.name())
+                    .unwrap_or_else(|| panic!("{board}: no cull {}:\n{out}", mode.name()));
+                let s = &h.stats;
+                assert_eq!(
+                    &c[1..],
+                    &[
+                        h.vertices as u64,
+                        s.boxes_tested as u64,
+                        s.nodes_culled as u64,
+                        s.objects_drawn as u64,
+                        s.commands as u64,
+                        s.prims_culled as u64,
+                        s.cost.reads,
+                        h.crc as u64
+                    ],
+                    "{board}: cull {} differs from the host's",
+                    mode.name()
+                );
+                assert_eq!(
+                    c[8],
+                    r.culls["none"][8],
+                    "{board}: cull {} is not exact",
+                    mode.name()
+                );
+                println!(
+                    "{board:>10} cull {}: CRC 0x{:08x} = host = unculled",
+                    mode.name(),
+                    h.crc
+                );
+            }
+            assert!(
+                full_occlusion,
+                "{board}: the full build has no occlusion code?"
+            );
+            assert!(
+                !min_occlusion,
+                "{board}: a build without the cull feature carries occlusion code"
             );
         }
         reports.push(BoardResult {
@@ -889,6 +972,42 @@ fn report(reports: &[BoardResult]) -> String {
             k(prep.0) / 1e6,
             k(prep.1)
         );
+    }
+    for b in &boards {
+        if b.culls.is_empty() {
+            continue;
+        }
+        use tilerast_fw::city::{FW_CITY, FW_FRAMES, FW_SCREEN};
+        let k = |t: u64| t as f64 * b.instr_per_tick;
+        md += &format!(
+            "\n## Occlusion culling ({})\n\nThe seed-004 workload (`targets/common/src/city.rs`): a city of \
+             {} x {} buildings (faces subdivided {}x{}) and its ground, walked for {FW_FRAMES} frames by a \
+             camera down its middle street, {FW_SCREEN}x{FW_SCREEN} RGB565 + 16-bit Z in 48x48 tiles, \
+             8x8 depth blocks; geometry, culling and raster counted, flush not. Every mode's frames \
+             equal the unculled frames and the host's (CRC). `reports/cull.md` has the host's scenes.\n\n\
+             | mode | instructions / frame | vs none | vertices | box tests | nodes culled | objects drawn | commands | primitives culled | depth reads |\n\
+             | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+            b.board, FW_CITY.side, FW_CITY.side, FW_CITY.sub, FW_CITY.sub
+        );
+        let none = k(b.culls.get("none").map_or(0, |c| c[0]));
+        for mode in tilerast::occlusion::CullMode::ALL {
+            let Some(c) = b.culls.get(mode.name()) else {
+                continue;
+            };
+            md += &format!(
+                "| {} | {:.0} | {:.2} | {} | {} | {} | {} | {} | {} | {} |\n",
+                mode.name(),
+                k(c[0]) / FW_FRAMES as f64,
+                k(c[0]) / none.max(1.0),
+                c[1],
+                c[2],
+                c[3],
+                c[4],
+                c[5],
+                c[6],
+                c[7]
+            );
+        }
     }
     md += "\n## Flash and RAM\n\nFlash is `.vector_table` + `.text` + `.rodata` (the scenes are in `.rodata`); \
            static RAM is `.data` + `.bss`; the stack high-water mark is measured by the firmware \

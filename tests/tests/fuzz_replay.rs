@@ -10,7 +10,7 @@ use tilerast_tests::{fuzz, repo, Rng};
 
 type Body = fn(&[u8]) -> bool;
 
-const TARGETS: [(&str, Body); 7] = [
+const TARGETS: [(&str, Body); 8] = [
     ("wire", fuzz::wire),
     ("commands", fuzz::commands),
     ("tile_api", fuzz::tile_api),
@@ -18,6 +18,7 @@ const TARGETS: [(&str, Body); 7] = [
     ("obj", fuzz::obj),
     ("mesh", fuzz::mesh),
     ("volume", fuzz::volume),
+    ("occlusion", fuzz::occlusion),
 ];
 
 /// Mutations per stored input (more with `FUZZ_REPLAY_MUTATIONS`).
@@ -91,6 +92,7 @@ corpus_tests! {
     obj_corpus: 4;
     mesh_corpus: 5;
     volume_corpus: 6;
+    occlusion_corpus: 7;
 }
 
 #[test]

@@ -47,6 +47,13 @@ fn glass_matches_golden() {
     check("glass");
 }
 
+/// A frame of the occlusion-culling city (seed 004), culled in one pass;
+/// the other modes draw the same pixels (`occlusion.rs`).
+#[test]
+fn city_matches_golden() {
+    check("city");
+}
+
 /// Textured meshes (spherical projection and OBJ `vt` + `map_Kd`), fast
 /// Phong and a translucent panel: seed 001 §IV together.
 #[test]

@@ -415,7 +415,7 @@ fn report() -> Result<(), String> {
         "-o",
         "reports/frames.md",
     ];
-    for lab in [&frames[..], &["volume-report"]] {
+    for lab in [&frames[..], &["volume-report"], &["cull-report"]] {
         let mut args = vec!["run", "--release", "-p", "tilerast-lab", "--"];
         args.extend_from_slice(lab);
         run("cargo", &args)?;
@@ -441,8 +441,15 @@ fn demo() -> Result<(), String> {
 }
 
 /// The cargo-fuzz targets (`fuzz/fuzz_targets/*.rs`).
-const FUZZ_TARGETS: [&str; 7] = [
-    "wire", "commands", "tile_api", "scene", "obj", "mesh", "volume",
+const FUZZ_TARGETS: [&str; 8] = [
+    "wire",
+    "commands",
+    "tile_api",
+    "scene",
+    "obj",
+    "mesh",
+    "volume",
+    "occlusion",
 ];
 
 fn fuzz(args: &[String]) -> Result<(), String> {

@@ -162,6 +162,12 @@ mod planes {
         fn test_and_set(&mut self, i: usize, z: i32) -> bool;
         /// The Z test without the write (partial-coverage fragments).
         fn test(&self, i: usize, z: i32) -> bool;
+        /// Pixels of `r` whose integer depth is above `z` (the occlusion
+        /// box test's count), the scan stopping once `limit` are found.
+        fn farther(&self, r: core::ops::Range<usize>, z: u16, limit: u32) -> u32;
+        /// [`Self::farther`], and the nearest and farthest integer depth of
+        /// `r`, in one pass (the occlusion summary's refresh).
+        fn farther_min_max(&self, r: core::ops::Range<usize>, z: u16) -> (u32, u16, u16);
     }
 
     /// Window-ID plane storage.
@@ -205,6 +211,32 @@ mod planes {
         fn test(&self, i: usize, z: i32) -> bool {
             Self::stored(z) < self.0 .0.as_flattened()[i].to_u32()
         }
+        fn farther(&self, r: core::ops::Range<usize>, z: u16, limit: u32) -> u32 {
+            let cells = &self.0 .0.as_flattened()[r];
+            if limit as usize >= cells.len() {
+                // No early stop possible: a branch-free count.
+                return cells
+                    .iter()
+                    .map(|c| (z < (c.to_u32() >> FRAC) as u16) as u32)
+                    .sum();
+            }
+            let mut n = 0;
+            for c in cells {
+                n += (z < (c.to_u32() >> FRAC) as u16) as u32;
+                if n >= limit {
+                    break;
+                }
+            }
+            n
+        }
+        fn farther_min_max(&self, r: core::ops::Range<usize>, z: u16) -> (u32, u16, u16) {
+            self.0 .0.as_flattened()[r]
+                .iter()
+                .fold((0, u16::MAX, 0), |(n, lo, hi), c| {
+                    let d = (c.to_u32() >> FRAC) as u16;
+                    (n + (z < d) as u32, lo.min(d), hi.max(d))
+                })
+        }
         #[inline(always)]
         fn test_and_set(&mut self, i: usize, z: i32) -> bool {
             let z = Self::stored(z);
@@ -233,6 +265,16 @@ mod planes {
         #[inline(always)]
         fn test(&self, _: usize, _: i32) -> bool {
             true
+        }
+        fn farther(&self, r: core::ops::Range<usize>, z: u16, limit: u32) -> u32 {
+            if z < u16::MAX {
+                (r.len() as u32).min(limit)
+            } else {
+                0
+            }
+        }
+        fn farther_min_max(&self, r: core::ops::Range<usize>, z: u16) -> (u32, u16, u16) {
+            (self.farther(r, z, u32::MAX), u16::MAX, u16::MAX)
         }
     }
 

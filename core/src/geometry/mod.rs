@@ -84,6 +84,17 @@ use crate::geom::Rect;
 use crate::numeric::{Coord, COORD_LIMIT};
 use clip::{ClipVertex, ALL};
 
+/// A box on screen: the pixels geometry inside a world-space box can
+/// touch, and a depth no fragment of it is nearer than
+/// ([`Scene::screen_box`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ScreenBox {
+    /// Pixels, inside the viewport.
+    pub rect: Rect,
+    /// 16-bit depth at or below every fragment's.
+    pub z: u16,
+}
+
 /// Directional lights a [`Lighting`] holds at most.
 pub const MAX_LIGHTS: usize = 4;
 
@@ -342,6 +353,19 @@ struct View<S> {
 }
 
 impl<S: Real> View<S> {
+    /// The viewport rectangle in pixels.
+    fn rect(&self) -> Rect {
+        let (x2, y2) = (
+            self.cx.to_fixed(1).unwrap_or(0),
+            self.cy.to_fixed(1).unwrap_or(0),
+        );
+        let (w, h) = (
+            self.hw.to_fixed(1).unwrap_or(0),
+            self.hh.to_fixed(1).unwrap_or(0),
+        );
+        Rect::new((x2 - w) / 2, (y2 - h) / 2, w.max(0) as u32, h.max(0) as u32)
+    }
+
     /// Projects an inside clip-space point to sub-pixels and depth.
     #[inline]
     fn project(&self, p: &[S; 4]) -> Option<(i32, i32, u16)> {
@@ -617,6 +641,98 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
         });
         self.stats.add(&stats);
         Ok(stats)
+    }
+
+    /// Draws made since [`clear`](Self::clear) (a mesh wholly outside the
+    /// frustum makes none).
+    pub fn draw_count(&self) -> usize {
+        self.draws.len()
+    }
+
+    /// Calls `f` with every command of draw `draw` (in draw order since
+    /// [`clear`](Self::clear)): what replaying that draw's keys gives, for
+    /// a caller that keeps draws apart ([`crate::occlusion`]).
+    pub fn each_of(&self, draw: usize, mut f: impl FnMut(&Command)) {
+        let Some(d) = self.draws.get(draw) else {
+            return;
+        };
+        for t in 0..d.mesh.triangles() {
+            self.emit(d, t, |_| true, &mut |_, c: &Command| f(c));
+        }
+    }
+
+    /// The screen rectangle and nearest depth of the world-space box
+    /// `lo..=hi` under this scene's camera and viewport, widened so that
+    /// every fragment of geometry inside the box lies in the rectangle and
+    /// is no nearer than `z` ([`ScreenBox`]). A box reaching behind the
+    /// camera (a corner with `w` at or below `near`'s side) covers the
+    /// viewport at depth 0; `None` when the box lies wholly outside one
+    /// frustum plane (nothing inside it can be drawn).
+    ///
+    /// ```
+    /// use tilerast::geometry::*;
+    /// use tilerast::prelude::*;
+    /// let mut slots = [VertexSlot::EMPTY; 1];
+    /// let mut scene: Scene<'_, f32> = Scene::new(&mut slots);
+    /// scene.set_camera(
+    ///     Mat4::look_at([0.0, 0.0, 5.0], [0.0; 3], [0.0, 1.0, 0.0])?,
+    ///     Mat4::perspective(Angle::degrees(60), 1.0, 1.0, 10.0)?,
+    /// );
+    /// scene.set_viewport(Rect::new(0, 0, 64, 64))?;
+    /// let b = scene.screen_box([-0.5; 3], [0.5; 3]).unwrap();
+    /// assert!(b.rect.x > 16 && b.rect.x1() < 48 && b.z > 0);
+    /// assert!(scene.screen_box([20.0; 3], [21.0; 3]).is_none()); // off screen
+    /// # Ok::<(), tilerast::Error>(())
+    /// ```
+    pub fn screen_box(&self, lo: Vec3<S>, hi: Vec3<S>) -> Option<ScreenBox> {
+        let vp = self.viewport;
+        let full = ScreenBox {
+            rect: vp.rect(),
+            z: 0,
+        };
+        let pv = self.proj.mul(&self.view);
+        let mut all = ALL;
+        let mut corners = [[S::ZERO; 4]; 8];
+        for (k, c) in corners.iter_mut().enumerate() {
+            let pick = |a: usize, bit: usize| if k & bit != 0 { hi[a] } else { lo[a] };
+            *c = pv.transform([pick(0, 1), pick(1, 2), pick(2, 4)]);
+            if !c.iter().all(|v| v.is_finite()) {
+                return Some(full);
+            }
+            all &= clip::outcode(c, [S::ONE; 2]);
+        }
+        if all != 0 {
+            return None;
+        }
+        // A corner at or behind the near plane has no screen position.
+        if corners
+            .iter()
+            .any(|c| c[2] < S::ZERO || !real::above(c[3], S::ZERO))
+        {
+            return Some(full);
+        }
+        let (mut x0, mut y0, mut x1, mut y1, mut z) =
+            (i32::MAX, i32::MAX, i32::MIN, i32::MIN, u16::MAX);
+        for c in &corners {
+            let Some((x, y, cz)) = vp.project(c) else {
+                return Some(full);
+            };
+            (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+            z = z.min(cz);
+        }
+        // Sub-pixels to pixels, one pixel of margin for the vertices'
+        // own rounding; two depth units below the nearest corner.
+        let px = |v: i32| (v >> 4) as i64;
+        let r = Rect::new(
+            (px(x0) - 1) as i32,
+            (px(y0) - 1) as i32,
+            (px(x1) - px(x0) + 3) as u32,
+            (px(y1) - px(y0) + 3) as u32,
+        );
+        Some(ScreenBox {
+            rect: r.intersect(&vp.rect())?,
+            z: z.saturating_sub(2),
+        })
     }
 
     /// The projected vertex `i` of draw `draw` (in draw order since

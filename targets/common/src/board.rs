@@ -127,6 +127,8 @@ pub fn run<const ND: usize, const NS: usize, const BC: usize, const BT: usize>(
         crate::report::report_anim(&mut out, &mut clock)?;
         #[cfg(feature = "volume")]
         crate::report::report_volume(&mut out, &mut clock)?;
+        #[cfg(feature = "cull")]
+        crate::report::report_city(&mut out, &mut clock)?;
         #[cfg(feature = "spin_teapot")]
         report_spin_teapot::<ND, BC, BT>(demo_tile, &mut out, &mut clock)?;
         #[cfg(feature = "spin_cube")]

@@ -18,6 +18,8 @@
 //!   by frame, with the vertex stage and the raster timed apart.
 //! - [`volumes`]: a density volume drawn by normal blending and by
 //!   per-slice shading (seed 002), phases timed apart.
+//! - [`city`]: a city walked through by a camera, drawn with occlusion
+//!   culling (seed 004) in each mode, frames hashed.
 //! - [`rng`]: the deterministic PRNG those workloads (and the host tests)
 //!   use.
 //! - [`report`]: the lines a firmware prints (scene CRCs, workload ticks),
@@ -31,6 +33,7 @@
 pub mod anim;
 #[cfg(feature = "board")]
 pub mod board;
+pub mod city;
 pub mod report;
 pub mod rng;
 pub mod spin;

@@ -154,6 +154,34 @@ pub fn report_volume(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt:
     }
 }
 
+/// Prints `cull MODE ticks T vertices V tested B culled C drawn O
+/// commands K prims_culled P reads R crc X` for each culling mode over
+/// the city walk ([`crate::city`]; 32 KB of vertex cache on the stack).
+#[inline(never)]
+pub fn report_city(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt::Result {
+    let mut slots = [tilerast::geometry::VertexSlot::EMPTY; crate::city::FW_SLOTS];
+    for mode in tilerast::occlusion::CullMode::ALL {
+        match crate::city::run_fw(mode, &mut slots, clock) {
+            Ok(r) => writeln!(
+                out,
+                "cull {} ticks {} vertices {} tested {} culled {} drawn {} commands {} prims_culled {} reads {} crc 0x{:08x}",
+                mode.name(),
+                r.ticks,
+                r.vertices,
+                r.stats.boxes_tested,
+                r.stats.nodes_culled,
+                r.stats.objects_drawn,
+                r.stats.commands,
+                r.stats.prims_culled,
+                r.stats.cost.reads,
+                r.crc
+            )?,
+            Err(e) => writeln!(out, "cull {} error {e}", mode.name())?,
+        }
+    }
+    Ok(())
+}
+
 /// Prints `anim frames F tiles T sent_tiles S bytes_full B bytes_sent P ticks K`:
 /// the animated gauge with partial updates ([`crate::anim`]).
 #[inline(never)]
