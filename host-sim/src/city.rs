@@ -181,17 +181,36 @@ pub fn walk<C: TileConfig, const G: usize, const B: usize, const SH: u32>(
     last: u32,
     mode: CullMode,
     threshold: u8,
-    mut each: impl FnMut(u32, &mut Tile<G, C>) -> Result<()>,
+    each: impl FnMut(u32, &mut Tile<G, C>) -> Result<()>,
 ) -> Result<Vec<WalkFrame>> {
     let mut bytes = vec![0u8; MESH_BYTES];
     let mut gbytes = vec![0u8; MESH_BYTES];
     let (building, ground) = city::meshes(c.sub, &mut bytes, &mut gbytes)?;
-    let n = c.objects();
-    let items: Vec<(Mesh<'_>, Mat4<f32>)> = (0..n).map(|i| c.item(i, building, ground)).collect();
+    let items: Vec<(Mesh<'_>, Mat4<f32>)> = (0..c.objects())
+        .map(|i| c.item(i, building, ground))
+        .collect();
+    let path = |k| c.view(k, frames).map_err(Error::from);
+    walk_scene::<C, G, B, SH>(&items, path, frame, last, mode, threshold, each)
+}
+
+/// Walks any objects (meshes placed by model matrices, at most 225) along
+/// a camera path (`path(k)` for frame `k`), for frames `0..=last`: the
+/// driver under [`walk`], and under the lab's room of teapots.
+#[allow(clippy::too_many_arguments)]
+pub fn walk_scene<C: TileConfig, const G: usize, const B: usize, const SH: u32>(
+    items: &[(Mesh<'_>, Mat4<f32>)],
+    path: impl Fn(u32) -> Result<city::Camera>,
+    frame: &Frame,
+    last: u32,
+    mode: CullMode,
+    threshold: u8,
+    mut each: impl FnMut(u32, &mut Tile<G, C>) -> Result<()>,
+) -> Result<Vec<WalkFrame>> {
     let boxes: Vec<Aabb<f32>> = items.iter().map(|(m, t)| Aabb::of_mesh(m, t)).collect();
     let mut culler: Box<Culler<f32, NODES>> = Box::new(Culler::new(KdTree::build(&boxes)?));
     culler.set_threshold(threshold)?;
-    let mut slots = vec![VertexSlot::EMPTY; n * 6 * (c.sub + 1) * (c.sub + 1)];
+    let verts = items.iter().map(|(m, _)| m.vertices() as usize).sum();
+    let mut slots = vec![VertexSlot::EMPTY; verts];
     let mut scene: Box<Scene<'_, f32, 226>> = Box::new(Scene::new(&mut slots));
     let s = frame.screen();
     scene.set_viewport(Rect::new(0, 0, s.w, s.h))?;
@@ -201,11 +220,11 @@ pub fn walk<C: TileConfig, const G: usize, const B: usize, const SH: u32>(
     let mut out = vec![];
     for k in 0..=last {
         let mut spent = 0.0;
+        let cam = path(k)?;
         let t0 = Instant::now();
         let (stats, vertices) = city::walk_frame(
-            c,
-            (k, frames),
-            &items,
+            cam,
+            items,
             &mut culler,
             &mut scene,
             (frame, &mut *tile, &mut *hiz),
@@ -241,26 +260,34 @@ pub fn walk_pixels<C: TileConfig, const G: usize, const B: usize, const SH: u32>
     mode: CullMode,
     threshold: u8,
 ) -> Result<(Vec<Vec<u32>>, Vec<WalkFrame>, u64)> {
+    collect_pixels(frame, frames, |each| {
+        walk::<C, G, B, SH>(c, frame, frames, frames.max(1) - 1, mode, threshold, each)
+    })
+}
+
+/// What [`collect_pixels`] hands a walker: the callback that keeps a tile.
+pub type Keep<'k, C, const G: usize> = &'k mut dyn FnMut(u32, &mut Tile<G, C>) -> Result<()>;
+
+/// Runs `walker` (a [`walk`] or [`walk_scene`] of `frames` frames) with a
+/// callback that keeps every frame's packed pixels and counts the pixels
+/// with depth written.
+pub fn collect_pixels<C: TileConfig, const G: usize>(
+    frame: &Frame,
+    frames: u32,
+    walker: impl FnOnce(Keep<'_, C, G>) -> Result<Vec<WalkFrame>>,
+) -> Result<(Vec<Vec<u32>>, Vec<WalkFrame>, u64)> {
     let side = frame.screen().w as usize;
     let n = side * frame.screen().h as usize;
     let mut px = vec![vec![0u32; n]; frames as usize];
     let mut visible = 0;
-    let walked = walk::<C, G, B, SH>(
-        c,
-        frame,
-        frames,
-        frames.max(1) - 1,
-        mode,
-        threshold,
-        |k, t| {
-            let out = &mut px[k as usize];
-            each_pixel(t, |x, y, raw, z| {
-                out[y as usize * side + x as usize] = raw;
-                visible += (z != u16::MAX) as u64;
-            });
-            Ok(())
-        },
-    )?;
+    let walked = walker(&mut |k, t| {
+        let out = &mut px[k as usize];
+        each_pixel(t, |x, y, raw, z| {
+            out[y as usize * side + x as usize] = raw;
+            visible += (z != u16::MAX) as u64;
+        });
+        Ok(())
+    })?;
     Ok((px, walked, visible))
 }
 

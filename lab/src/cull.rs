@@ -6,9 +6,10 @@
 
 use crate::chart::{err, plot, SANS};
 use plotters::prelude::*;
+use tilerast::geometry::{Angle, Mat4, Mesh};
 use tilerast::occlusion::{CullMode, CullStats};
 use tilerast::prelude::*;
-use tilerast_fw::city::City;
+use tilerast_fw::city::{Camera, City, MESH_BYTES};
 use tilerast_sim::Image;
 
 /// Screen side, pixels.
@@ -42,26 +43,66 @@ pub struct Row {
     pub lost: u64,
 }
 
-/// The two variants: ~large and ~small drawn triangles.
-pub fn scenes() -> [(&'static str, City); 2] {
+/// Where a walk goes.
+#[derive(Debug, Clone, Copy)]
+pub enum Place {
+    /// The city of `tilerast_fw::city`, down its middle street.
+    City(City),
+    /// A room of 6 x 6 models on a floor, circled by the camera:
+    /// `assets/models/<model>.obj` (the crate: large triangles; the
+    /// teapot: small ones).
+    Room(&'static str),
+}
+
+/// The scenes: the city and the room, each with large and small drawn
+/// triangles.
+pub fn scenes() -> [(&'static str, Place); 4] {
+    let city = |sub| {
+        Place::City(City {
+            side: 10,
+            sub,
+            seed: 17,
+        })
+    };
     [
-        (
-            "city, large triangles",
-            City {
-                side: 10,
-                sub: 1,
-                seed: 17,
-            },
-        ),
-        (
-            "city, small triangles",
-            City {
-                side: 10,
-                sub: 4,
-                seed: 17,
-            },
-        ),
+        ("city, large triangles", city(1)),
+        ("city, small triangles", city(4)),
+        ("room of crates, large triangles", Place::Room("crate")),
+        ("room of teapots, small triangles", Place::Room("teapot")),
     ]
+}
+
+/// Room side, models.
+const ROOM: usize = 6;
+
+/// The room's objects: `model` on a 6 x 6 grid, each turned, and the
+/// floor slab last.
+fn room_items<'m>(model: Mesh<'m>, floor: Mesh<'m>) -> Vec<(Mesh<'m>, Mat4<f32>)> {
+    let mut items: Vec<_> = (0..ROOM * ROOM)
+        .map(|i| {
+            let (x, z) = ((i % ROOM) as f32 - 2.5, (i / ROOM) as f32 - 2.5);
+            let turn = Angle::degrees((i as i32 * 53) % 360);
+            let m = Mat4::translation([1.5 * x, 0.45, 1.5 * z])
+                .mul(&Mat4::rotation_y(turn))
+                .mul(&Mat4::scale([0.9; 3]));
+            (model, m)
+        })
+        .collect();
+    let slab = Mat4::translation([0.0, -0.05, 0.0]).mul(&Mat4::scale([12.0, 0.1, 12.0]));
+    items.push((floor, slab));
+    items
+}
+
+/// The room's camera at frame `k` of `frames`: once around, outside the
+/// grid, looking across it.
+fn room_camera(k: u32, frames: u32) -> tilerast_sim::Result<Camera> {
+    let a = std::f32::consts::TAU * k as f32 / frames.max(1) as f32;
+    let eye = [9.0 * a.cos(), 1.4, 9.0 * a.sin()];
+    Ok((
+        eye,
+        Mat4::look_at(eye, [0.0, 0.3, 0.0], [0.0, 1.0, 0.0])?,
+        Mat4::perspective(Angle::degrees(60), 1.0, 0.1, 40.0)?,
+    ))
 }
 
 type Cfg = St7789Config;
@@ -70,7 +111,7 @@ type Cfg = St7789Config;
 /// (packed) when `keep`.
 fn walk<const SH: u32>(
     name: &str,
-    c: &City,
+    place: &Place,
     frames: u32,
     mode: CullMode,
     threshold: u8,
@@ -79,9 +120,33 @@ fn walk<const SH: u32>(
 ) -> Result<(Row, Vec<Vec<u32>>), String> {
     let mut frame = Tile::<G, Cfg>::frame::<TILE, TILE>(SCREEN, SCREEN).map_err(err)?;
     frame.clear.color = tilerast_fw::city::SKY;
-    let (mut kept, walked, visible) =
-        tilerast_sim::city::walk_pixels::<Cfg, G, 144, SH>(c, &frame, frames, mode, threshold)
-            .map_err(err)?;
+    let (mut kept, walked, visible) = match place {
+        Place::City(c) => {
+            tilerast_sim::city::walk_pixels::<Cfg, G, 144, SH>(c, &frame, frames, mode, threshold)
+        }
+        Place::Room(model) => {
+            let path = std::path::PathBuf::from(format!("assets/models/{model}.obj"));
+            let bytes = tilerast_sim::mesh::export_mesh(&path, &tilerast_sim::Limits::default())
+                .map_err(err)?;
+            let mesh = Mesh::parse(&bytes).map_err(err)?;
+            let mut fbytes = vec![0u8; MESH_BYTES];
+            let floor =
+                tilerast_fw::city::cube(1, Rgb::new(150, 120, 90), &mut fbytes).map_err(err)?;
+            let items = room_items(mesh, floor);
+            tilerast_sim::city::collect_pixels(&frame, frames, |each| {
+                tilerast_sim::city::walk_scene::<Cfg, G, 144, SH>(
+                    &items,
+                    |k| room_camera(k, frames),
+                    &frame,
+                    frames - 1,
+                    mode,
+                    threshold,
+                    each,
+                )
+            })
+        }
+    }
+    .map_err(err)?;
     let mut row = Row {
         scene: name.into(),
         mode,
@@ -173,7 +238,12 @@ pub fn chart(rows: &[Row]) -> Result<Image, String> {
             .label_style((SANS, 13))
             .draw()
             .map_err(err)?;
-        let colors = [RGBColor(40, 90, 200), RGBColor(220, 90, 40)];
+        let colors = [
+            RGBColor(40, 90, 200),
+            RGBColor(220, 90, 40),
+            RGBColor(40, 160, 80),
+            RGBColor(150, 60, 170),
+        ];
         for (si, (name, _)) in scenes().iter().enumerate() {
             let pts: Vec<(f64, f64)> = CullMode::ALL
                 .iter()
@@ -202,7 +272,7 @@ pub fn chart(rows: &[Row]) -> Result<Image, String> {
     })
 }
 
-/// A frame of each variant (the middle of the path), single pass.
+/// A frame of each scene (the middle of the path), single pass.
 pub fn pictures(frames: u32) -> Result<Image, String> {
     let mut pics = vec![];
     for (name, c) in scenes() {
@@ -219,7 +289,7 @@ pub fn pictures(frames: u32) -> Result<Image, String> {
         }
         pics.push(img);
     }
-    Ok(crate::chart::grid(&[&pics[..]]))
+    Ok(crate::chart::grid(&[&pics[..2], &pics[2..]]))
 }
 
 /// The Markdown report.
@@ -227,15 +297,19 @@ pub fn report(rows: &[Row], chart: &std::path::Path, image: &std::path::Path) ->
     let mut md = format!(
         "# Occlusion culling during rasterization (seed 004)\n\n\
          Regenerate: `cargo run --release -p tilerast-lab -- cull-report` (or `cargo xtask report`).\n\n\
-         The city of `targets/common/src/city.rs`: {0} x {0} buildings and a ground slab, walked by a \
-         camera down its middle street, {1}x{1} RGB565 + 16-bit Z in {2}x{2} tiles, f32 geometry stage. \
-         *Large triangles*: box faces of 2 triangles; *small*: faces cut 4x4 (the seed's best and worst cases were ~780 and ~30 px per drawn triangle; the last column gives ours). Every mode draws the \
+         Two places, each with large and small drawn triangles (the seed's best and worst cases were \
+         ~780 and ~30 px per drawn triangle; the last column gives ours), {1}x{1} RGB565 + 16-bit Z in \
+         {2}x{2} tiles, f32 geometry stage: the city of `targets/common/src/city.rs`, {0} x {0} \
+         buildings and a ground slab walked by a camera down its middle street (*large*: box faces of \
+         2 triangles; *small*: faces cut 4x4), and a room of {3} x {3} crates or teapots \
+         (`assets/models/`) on a floor, circled once by the camera. Every mode draws the \
          same frames: at threshold 0 the lost pixels are 0 on every frame (also a test). Host times \
          are medians per frame (geometry, culling, raster; the copy out excluded) on this machine; \
          the Cortex-M4 instruction counts are in `reports/targets.md`.\n\n",
-        scenes()[0].1.side,
+        10,
         SCREEN,
-        TILE
+        TILE,
+        ROOM
     );
     md += "## Per mode (threshold 0, 8x8 blocks), per frame\n\n\
            | scene | mode | µs / frame | ACPF (ns) | vertices | boxes tested | fragments tested | depth reads | nodes culled | objects drawn | triangles drawn | triangles culled early | visible px | px / triangle |\n\

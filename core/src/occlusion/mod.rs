@@ -371,8 +371,8 @@ impl<S: Real, const NODES: usize> Culler<S, NODES> {
     /// Whether the baselines' queries ([`CullMode::StopAndWait`],
     /// [`CullMode::Chc`]) stop at `threshold + 1` too. By default they
     /// count every fragment of the box, as an occlusion query's pass does
-    /// (`GL_SAMPLES_PASSED`); a software query can stop early, and
-    /// `tilerast-lab cull-report` measures both.
+    /// (`GL_SAMPLES_PASSED`); a software query can stop early as well,
+    /// which this measures.
     pub fn set_early_queries(&mut self, early: bool) {
         self.early_queries = early;
     }

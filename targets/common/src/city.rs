@@ -249,8 +249,7 @@ pub fn run_fw(
         clock.lap();
         let mut ticks = 0;
         let (st, vertices) = walk_frame(
-            &city,
-            (k, FW_FRAMES),
+            city.view(k, FW_FRAMES)?,
             &items,
             &mut culler,
             &mut scene,
@@ -275,9 +274,9 @@ pub fn run_fw(
     Ok(run)
 }
 
-/// One frame of a city walk: sets `scene`'s camera for frame `k` of
-/// `frames` (the caller has set viewport and lights), renders every tile
-/// with `mode` and hands each to `done`. Returns the culling counts and the
+/// One frame of a walk through `items`: sets `scene`'s camera to `cam`
+/// (the caller has set viewport and lights), renders every tile with
+/// `mode` and hands each to `done`. Returns the culling counts and the
 /// vertices the geometry stage transformed.
 #[allow(clippy::too_many_arguments)]
 pub fn walk_frame<
@@ -290,8 +289,7 @@ pub fn walk_frame<
     const NODES: usize,
     E,
 >(
-    city: &City,
-    (k, frames): (u32, u32),
+    (eye, view, proj): Camera,
     items: &[(Mesh<'a>, Mat4<f32>)],
     culler: &mut Culler<f32, NODES>,
     scene: &mut Scene<'a, f32, D>,
@@ -302,7 +300,6 @@ pub fn walk_frame<
 where
     C: TileConfig,
 {
-    let (eye, view, proj) = city.view(k, frames)?;
     scene.clear();
     scene.set_camera(view, proj);
     let mut objects = MeshObjects::new(scene, items, DrawOptions::default())?;
