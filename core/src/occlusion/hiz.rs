@@ -140,7 +140,8 @@ impl<const BLOCKS: usize, const SHIFT: u32> HiZ<BLOCKS, SHIFT> {
     /// read; a stale block is read row by row, and refreshed when the test
     /// read all of it. Without, every pixel up to the limit is read (what
     /// an occlusion query's pass over the box costs). The count is the
-    /// same either way.
+    /// same either way. A summary last reset for another rectangle than
+    /// `tile`'s is reset to the tile's first.
     pub fn count<const N: usize, C: TileConfig>(
         &mut self,
         tile: &Tile<N, C>,
@@ -150,6 +151,11 @@ impl<const BLOCKS: usize, const SHIFT: u32> HiZ<BLOCKS, SHIFT> {
         limit: u32,
         cost: &mut TestCost,
     ) -> u32 {
+        // A summary reset for another rectangle than the tile's would
+        // index the depth plane wrongly: it follows the tile instead.
+        if self.area != tile.area {
+            self.reset(tile.area);
+        }
         let Some(r) = r.intersect(&self.area) else {
             return 0;
         };
@@ -268,5 +274,41 @@ impl<const BLOCKS: usize, const SHIFT: u32> HiZ<BLOCKS, SHIFT> {
             let at = (y - a.y) as usize * w + x0;
             at..at + len
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::command::Command;
+    use crate::config::Planes;
+    use crate::format::Rgb565Format;
+    use crate::fragment::Depth16;
+    use crate::tile::Clear;
+
+    /// A summary reset for a larger rectangle than the tile's counts the
+    /// tile's pixels, not past its depth plane.
+    #[test]
+    fn summary_for_another_rectangle_follows_the_tile() {
+        let mut tile: Tile<32, Planes<Rgb565Format, Depth16>> = Tile::new();
+        tile.begin(Rect::new(0, 0, 16, 16), &Clear::default())
+            .unwrap();
+        tile.draw(&Command::zfill(Rect::new(0, 0, 8, 16), 100))
+            .unwrap();
+        let mut hiz: HiZ<64, 3> = HiZ::new();
+        hiz.reset(Rect::new(-40, -40, 64, 64));
+        let mut cost = TestCost::default();
+        let all = u32::MAX;
+        for summary in [true, false] {
+            let n = hiz.count(
+                &tile,
+                Rect::new(-8, -8, 64, 64),
+                200,
+                summary,
+                all,
+                &mut cost,
+            );
+            assert_eq!(n, 16 * 8);
+        }
     }
 }
