@@ -159,6 +159,56 @@ pub(crate) fn div_round(n: i64, d: i64) -> i64 {
     div_floor(n + d / 2, d)
 }
 
+/// `floor(n / d)` for `d < 2^24` by schoolbook division in 32-bit steps:
+/// the high word, then four 8-bit digits, each a 32-by-32-bit division
+/// whose dividend (remainder times 256 plus a digit) stays below 2^32. On
+/// a chip with a hardware divider (Cortex-M3 and up) that is five `udiv`s,
+/// against a 64-bit library division (about 170 instructions on the
+/// Cortex-M4 for a 24-bit divisor, measured) or a reciprocal.
+#[inline(always)]
+pub(crate) fn div_floor_u24(n: u64, d: u32) -> u64 {
+    debug_assert!(d > 0 && d < 1 << 24);
+    let hi = (n >> 32) as u32;
+    let (q_hi, mut r) = (hi / d, hi % d);
+    let mut q_lo = 0u32;
+    let lo = n as u32;
+    let mut k = 4;
+    while k > 0 {
+        k -= 1;
+        let cur = (r << 8) | ((lo >> (8 * k)) & 0xff);
+        let q = cur / d;
+        r = cur - q * d;
+        q_lo = (q_lo << 8) | q;
+    }
+    ((q_hi as u64) << 32) | q_lo as u64
+}
+
+/// Whether this chip divides 32-bit integers in hardware: every Arm
+/// M-profile core with 32-bit atomics (ARMv7-M, ARMv8-M) has `udiv`; the
+/// Cortex-M0 (ARMv6-M) has neither. Elsewhere (the host) a 64-bit
+/// division is one instruction.
+pub(crate) const HW_DIV32: bool = cfg!(all(target_arch = "arm", target_has_atomic = "32"));
+
+/// `(a / d, b / d)` rounded to nearest, ties up ([`div_round`]'s results),
+/// for `|a|, |b| < 2^62` and `d > 0`: two quotients by one divisor, each
+/// by the fastest exact route the chip has. A 64-bit host divides; a chip
+/// that divides 32-bit integers in hardware (ARMv7-M and up) takes
+/// [`div_floor_u24`] when `d < 2^24` and both are non-negative; otherwise
+/// (the Cortex-M0, whose every division is a library call) one reciprocal
+/// serves both.
+#[inline(always)]
+pub(crate) fn div_round_pair(a: i64, b: i64, d: i64) -> (i64, i64) {
+    if cfg!(target_pointer_width = "64") {
+        (div_round(a, d), div_round(b, d))
+    } else if HW_DIV32 && d < 1 << 24 && a >= 0 && b >= 0 {
+        let q = |n: i64| div_floor_u24((n + d / 2) as u64, d as u32) as i64;
+        (q(a), q(b))
+    } else {
+        let r = Divisor::new(d);
+        (r.round(a), r.round(b))
+    }
+}
+
 /// The high 64 bits of `a b`, from four 32x32-bit products: the same code
 /// as a `u128` product on the Cortex-M4 (four `umull`s; measured equal), and
 /// four 64-bit multiply calls on the Cortex-M0, where `u128` becomes a
@@ -237,6 +287,34 @@ mod tests {
         assert_eq!(div_round(8, 16), 1);
         assert_eq!(div_round(-8, 16), 0);
         assert_eq!(div_round(-9, 16), -1);
+    }
+
+    #[test]
+    fn narrow_division_is_exact() {
+        let mut x = 0x9e37_79b9_7f4a_7c15u64;
+        for i in 0..200_000u64 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let d = match i % 4 {
+                0 => (x >> 40) as u32 | 1,
+                1 => (1 << 24) - 1 - (i as u32 & 0xff),
+                2 => 1 + (i as u32 & 0xff),
+                _ => ((x >> 8) as u32 & 0xff_ffff).max(1),
+            };
+            let n = x >> (x & 15);
+            assert_eq!(div_floor_u24(n, d), n / d as u64, "{n} / {d}");
+            let (n, d) = ((n >> 2) as i64, d as i64);
+            let q = div_floor_u24((n + d / 2) as u64, d as u32) as i64;
+            assert_eq!(q, div_round(n, d));
+            assert_eq!(div_round_pair(n, -n, d), (q, div_round(-n, d)));
+            assert_eq!(Divisor::new(d).round(n), q);
+        }
+        assert_eq!(div_floor_u24(u64::MAX, 1), u64::MAX);
+        assert_eq!(
+            div_floor_u24(u64::MAX, (1 << 24) - 1),
+            u64::MAX / ((1 << 24) - 1)
+        );
     }
 
     #[test]

@@ -23,10 +23,12 @@
 //!   one quadratic over a 216-pixel span of a wall at depth ratio 3 is off
 //!   by a texel (measured, `tests/tests/texture.rs`), and the interpolation
 //!   error falls with the cube of the length;
-//! - the shade is linear along the span.
+//! - the shade is linear along the span;
+//! - a span steps its coordinates in 32 bits, `I14.18` texels
+//!   ([`STEP_FRAC`]): the samples are exact, the steps rounded.
 
 use crate::format::Lanes;
-use crate::numeric::{Divisor, W_FRAC};
+use crate::numeric::{div_round_pair, Divisor, W_FRAC};
 use crate::raster::traverse::Row;
 use crate::setup::{EdgeInt, TriangleSetup};
 use crate::texture::{TexVertex, PERSPECTIVE_EXACT, PERSPECTIVE_QUADRATIC};
@@ -60,20 +62,46 @@ pub(crate) const SEGMENT_BITS: u32 = 5;
 /// Pixels per segment of the quadratic mode (the last of a span shorter).
 pub(crate) const SEGMENT: i64 = 1 << SEGMENT_BITS;
 
-/// The state a span loop steps: coordinates and their first and second
-/// differences (32.32 texels), the shade and its step (8.16); for the
-/// exact mode the edge values at the current pixel; for the quadratic
-/// mode the pixels left in the segment, the next segment's offset from
-/// `xr` and the exact coordinates there (the segment's end), the span's
-/// last offset and its edge values at `xr`.
+/// Fraction bits of the coordinates a span steps (`I14.18` texels): the
+/// coordinates lie in `0..4096` texels inside a triangle (convex
+/// combinations of `U12.4` vertex coordinates; a segment's quadratic
+/// overshoots its samples by at most an eighth of their range), so they,
+/// their steps and second differences fit 32 bits, one register each on
+/// a 32-bit chip. Rounding the samples and steps to 2^-18 adds at most
+/// `2^-19 (1 + k + k^2 / 2)` texel after `k` steps: 2^-9 over a whole
+/// 32-pixel segment, 2^-8 over a 180-pixel affine span.
+pub(crate) const STEP_FRAC: u32 = 18;
+
+/// A 32.32-texel value rounded to [`STEP_FRAC`] fraction bits.
+#[inline(always)]
+fn to_step(x: i64) -> i32 {
+    ((x + (1 << (31 - STEP_FRAC))) >> (32 - STEP_FRAC)) as i32
+}
+
+/// What a span loop steps per pixel: coordinates and their first and
+/// second differences ([`STEP_FRAC`]), the shade and its step (8.16); for
+/// the exact mode the edge values at the current pixel and their steps
+/// (the quadratic mode keeps its edge values at `xr` there).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct TexStep {
+    u: [i32; 3],
+    v: [i32; 3],
+    /// The shade (8.16 on the 0..255 scale).
+    pub l: i32,
+    dl: i32,
+    e: [i64; 2],
+    ea: [i64; 2],
+}
+
+/// A span's state: what its pixels step ([`TexStep`]) and, for the
+/// quadratic mode, the pixels left in the segment, the next segment's
+/// offset from `xr` and the exact coordinates there (the segment's end,
+/// 32.32), the span's last offset.
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct TexSpan {
-    pub u: [i64; 3],
-    pub v: [i64; 3],
-    pub l: i32,
-    pub dl: i32,
-    pub e: [i64; 2],
-    left: i64,
+    /// The stepped state at the span's current pixel.
+    pub px: TexStep,
+    left: i32,
     next: i64,
     end: (i64, i64),
     n: i64,
@@ -81,13 +109,15 @@ pub(crate) struct TexSpan {
     phase: i64,
 }
 
-/// `1/m` for the segment lengths `m` in `1..SEGMENT` (a partial segment at a
-/// span's ends), computed at compile time: no division per segment.
-const BY_M: [Divisor; SEGMENT as usize] = {
+/// `1 / (m^2 2^(32 - STEP_FRAC))` for the segment lengths `m` in
+/// `1..SEGMENT` (a partial segment at a span's ends): a segment's steps,
+/// 32.32 differences over `m^2` straight into [`STEP_FRAC`], one rounding
+/// each, from a table computed at compile time (no division per segment).
+const BY_M2: [Divisor; SEGMENT as usize] = {
     let mut t = [Divisor::new(1); SEGMENT as usize];
     let mut m = 1;
     while m < SEGMENT as usize {
-        t[m] = Divisor::new(m as i64);
+        t[m] = Divisor::new(((m * m) as i64) << (32 - STEP_FRAC));
         m += 1;
     }
     t
@@ -145,11 +175,11 @@ impl TexSetup {
     #[inline(always)]
     pub(crate) fn uv<const PERSPECTIVE: bool>(&self, w: (i64, i64)) -> (i64, i64) {
         if PERSPECTIVE {
-            // s, t, q with 8 more fraction bits: s < 2^40, so s 2^20 fits;
-            // one reciprocal of q serves both quotients (exact, rounded).
+            // s, t, q with 8 more fraction bits: s < 2^40, so s 2^20 fits,
+            // and q < 2^24 (exact quotients, rounded).
             let f = |i: usize| (self.f0[i] << 8) + self.lerp(i, w, 22);
-            let q = Divisor::new(f(Q).max(1));
-            (q.round(f(S) << 20) << 8, q.round(f(T) << 20) << 8)
+            let (u, v) = div_round_pair(f(S) << 20, f(T) << 20, f(Q).max(1));
+            (u << 8, v << 8)
         } else {
             let f = |i: usize| (self.f0[i] << 28) + self.lerp(i, w, 2);
             (f(UA), f(VA))
@@ -176,122 +206,132 @@ impl TexSetup {
         let per_px = Divisor::new(n.max(1));
         let dl = per_px.round((l1 - l0) as i64) as i32;
         let mut s = TexSpan {
-            l: l0 + dl * k as i32,
-            dl,
+            px: TexStep {
+                l: l0 + dl * k as i32,
+                dl,
+                e,
+                ..TexStep::default()
+            },
             n,
-            e,
             ..TexSpan::default()
         };
         match MODE {
             PERSPECTIVE_EXACT => {
-                s.e = [row.e1 + self.a[0] * k, row.e2 + self.a[1] * k];
-                s.u[0] = self.a[0];
-                s.v[0] = self.a[1];
+                s.px.e = [row.e1 + self.a[0] * k, row.e2 + self.a[1] * k];
+                s.px.ea = self.a;
             }
             PERSPECTIVE_QUADRATIC => {
                 s.phase = row.xr & (SEGMENT - 1);
                 let first = (((k + s.phase) & !(SEGMENT - 1)) - s.phase).max(0);
-                s.end = self.uv::<true>(self.at(e, 2 * first));
+                s.end = self.uv::<true>(if first == 0 {
+                    w0
+                } else {
+                    self.at(e, 2 * first)
+                });
                 self.segment(&mut s, first);
-                advance(&mut s.u, k - first);
-                advance(&mut s.v, k - first);
-                s.left -= k - first;
+                advance(&mut s.px.u, k - first);
+                advance(&mut s.px.v, k - first);
+                s.left -= (k - first) as i32;
             }
             _ => {
                 let (p0, p1) = (self.uv::<false>(w0), self.uv::<false>(w1));
-                let (du, dv) = (per_px.round(p1.0 - p0.0), per_px.round(p1.1 - p0.1));
-                s.u = [p0.0, du, 0];
-                s.v = [p0.1, dv, 0];
-                advance(&mut s.u, k);
-                advance(&mut s.v, k);
+                let d = |a: i64, b: i64| to_step(per_px.round(b - a));
+                s.px.u = [to_step(p0.0), d(p0.0, p1.0), 0];
+                s.px.v = [to_step(p0.1), d(p0.1, p1.1), 0];
+                advance(&mut s.px.u, k);
+                advance(&mut s.px.v, k);
             }
         }
         s
     }
 
     /// Loads the quadratic segment starting `first` pixels into the span,
-    /// whose exact start coordinates are `s.end`.
+    /// whose exact start coordinates are `s.end`; past the span's last
+    /// pixel, nothing (the loop is done).
     #[inline(never)]
     fn segment(&self, s: &mut TexSpan, first: i64) {
         let m = (SEGMENT - ((first + s.phase) & (SEGMENT - 1))).min(s.n - first);
+        if m <= 0 {
+            let p = s.end;
+            s.px.u = [to_step(p.0), 0, 0];
+            s.px.v = [to_step(p.1), 0, 0];
+            s.left = i32::MAX;
+            return;
+        }
         let p0 = s.end;
-        let (pm, p1) = if m > 0 {
-            (
-                self.uv::<true>(self.at(s.e, 2 * first + m)),
-                self.uv::<true>(self.at(s.e, 2 * (first + m))),
-            )
-        } else {
-            (p0, p0)
-        };
-        let steps = |f0: i64, fm: i64, f1: i64| -> [i64; 3] {
-            if m == 0 {
-                return [f0, 0, 0];
-            }
+        let pm = self.uv::<true>(self.at(s.px.e, 2 * first + m));
+        let p1 = self.uv::<true>(self.at(s.px.e, 2 * (first + m)));
+        // `d(0) = A + B = (2 c + m (f(m) - f(0) - 2 c)) / m^2`, `dd = 4 c / m^2`
+        // with `c = f(0) - 2 f(m/2) + f(m)`: one rounding each, into
+        // STEP_FRAC (a shift for a whole segment).
+        let steps = |f0: i64, fm: i64, f1: i64| -> [i32; 3] {
             let c = f0 - 2 * fm + f1;
+            let (n1, n2) = (2 * c + m * (f1 - f0 - 2 * c), 4 * c);
             let (d1, d2) = if m == SEGMENT {
-                // div_round by a power of two: the same integers, shifted.
-                let r = |x: i64, b: u32| (x + (1 << (b - 1))) >> b;
-                (
-                    r(2 * c, 2 * SEGMENT_BITS) + r(f1 - f0 - 2 * c, SEGMENT_BITS),
-                    r(4 * c, 2 * SEGMENT_BITS),
-                )
+                let b = 2 * SEGMENT_BITS + 32 - STEP_FRAC;
+                let r = |x: i64| (x + (1 << (b - 1))) >> b;
+                (r(n1), r(n2))
             } else {
-                // `/ m^2` as `/ m` twice (rounded twice: within 2^-31
-                // texel of one rounding).
-                let by_m = BY_M[m as usize];
-                let sq = |x: i64| by_m.round(by_m.round(x));
-                (sq(2 * c) + by_m.round(f1 - f0 - 2 * c), sq(4 * c))
+                let by = BY_M2[m as usize];
+                (by.round(n1), by.round(n2))
             };
-            [f0, d1, d2]
+            [to_step(f0), d1 as i32, d2 as i32]
         };
-        s.u = steps(p0.0, pm.0, p1.0);
-        s.v = steps(p0.1, pm.1, p1.1);
+        s.px.u = steps(p0.0, pm.0, p1.0);
+        s.px.v = steps(p0.1, pm.1, p1.1);
         s.end = p1;
-        s.left = if m == 0 { i64::MAX } else { m };
+        s.left = m as i32;
         s.next = first + m;
     }
 }
 
 /// A coordinate's state `[f, d, dd]` advanced `k` steps in closed form:
-/// the same integers `k` steps reach (modulo 2^64).
+/// the same integers `k` steps reach (modulo 2^32).
 #[inline(always)]
-fn advance(f: &mut [i64; 3], k: i64) {
-    let tri = (k * (k - 1) / 2).wrapping_mul(f[2]);
-    f[0] = f[0].wrapping_add(k.wrapping_mul(f[1])).wrapping_add(tri);
+fn advance(f: &mut [i32; 3], k: i64) {
+    let (k, tri) = (k as i32, (k * (k - 1) / 2) as i32);
+    f[0] = f[0]
+        .wrapping_add(k.wrapping_mul(f[1]))
+        .wrapping_add(tri.wrapping_mul(f[2]));
     f[1] = f[1].wrapping_add(k.wrapping_mul(f[2]));
 }
 
-/// One pixel on: the exact mode's edges step (`u[0]`, `v[0]` hold their
-/// steps), the others' coordinates; the quadratic mode loads the next
-/// segment at a segment's end.
+/// One pixel on: the exact mode's edges step, the others' coordinates
+/// (first and second differences for the quadratic), and the shade; the
+/// quadratic mode loads the next segment at a segment's end.
 #[inline(always)]
 pub(crate) fn step<const MODE: u8>(ts: &TexSetup, s: &mut TexSpan) {
+    let p = &mut s.px;
     if MODE == PERSPECTIVE_EXACT {
-        s.e[0] += s.u[0];
-        s.e[1] += s.v[0];
+        p.e[0] += p.ea[0];
+        p.e[1] += p.ea[1];
     } else if MODE == PERSPECTIVE_QUADRATIC {
         s.left -= 1;
         if s.left == 0 {
             ts.segment(s, s.next);
         } else {
-            s.u[0] = s.u[0].wrapping_add(s.u[1]);
-            s.v[0] = s.v[0].wrapping_add(s.v[1]);
-            s.u[1] = s.u[1].wrapping_add(s.u[2]);
-            s.v[1] = s.v[1].wrapping_add(s.v[2]);
+            p.u[0] = p.u[0].wrapping_add(p.u[1]);
+            p.v[0] = p.v[0].wrapping_add(p.v[1]);
+            p.u[1] = p.u[1].wrapping_add(p.u[2]);
+            p.v[1] = p.v[1].wrapping_add(p.v[2]);
         }
     } else {
-        s.u[0] = s.u[0].wrapping_add(s.u[1]);
-        s.v[0] = s.v[0].wrapping_add(s.v[1]);
+        p.u[0] = p.u[0].wrapping_add(p.u[1]);
+        p.v[0] = p.v[0].wrapping_add(p.v[1]);
     }
-    s.l += s.dl;
+    s.px.l += s.px.dl;
 }
 
-/// The coordinates at the span state's pixel.
+/// The coordinates (32.32 texels) at the span state's pixel.
 #[inline(always)]
 pub(crate) fn coords<const MODE: u8>(ts: &TexSetup, s: &TexSpan) -> (i64, i64) {
+    let p = &s.px;
     if MODE == PERSPECTIVE_EXACT {
-        ts.uv::<true>(ts.weights(s.e[0], s.e[1]))
+        ts.uv::<true>(ts.weights(p.e[0], p.e[1]))
     } else {
-        (s.u[0], s.v[0])
+        (
+            (p.u[0] as i64) << (32 - STEP_FRAC),
+            (p.v[0] as i64) << (32 - STEP_FRAC),
+        )
     }
 }

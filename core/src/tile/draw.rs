@@ -321,7 +321,7 @@ where
                     let c = tex.sample(u, v);
                     // The shade (8.16 on the 0..255 scale) as a fraction
                     // of full scale (0.16): x 257/256 for / 255.
-                    let l = ((sp.l.max(0) as u32 >> 8) * 257) >> 8;
+                    let l = ((sp.px.l.max(0) as u32 >> 8) * 257) >> 8;
                     let src = F::lanes_modulated([c.r, c.g, c.b], l);
                     let out = if BLEND {
                         let old = F::unpack_masked(tile.color.get(idx), mask);
