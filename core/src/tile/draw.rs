@@ -309,35 +309,52 @@ where
             let first = ((row.py - r.y as i64) * r.w as i64 + (row.x0 - r.x as i64)) as usize;
             let mut sp = ts.span::<MODE>(&row, row.x0);
             let (mut z, mut a) = (start.z + (1 << (Z_FRAC - 1)), a.wrapping_add(1 << 15));
-            for (idx, x) in (first..).zip(row.x0..row.x1) {
-                let pass = tile.wid.pass(idx, st.wid)
-                    && if zwrite {
-                        tile.depth.test_and_set(idx, z)
-                    } else {
-                        tile.depth.test(idx, z)
-                    };
-                if pass {
-                    let (u, v) = texmap::coords::<MODE>(ts, &sp);
-                    let c = tex.sample(u, v);
-                    // The shade (8.16 on the 0..255 scale) as a fraction
-                    // of full scale (0.16): x 257/256 for / 255.
-                    let l = ((sp.px.l.max(0) as u32 >> 8) * 257) >> 8;
-                    let src = F::lanes_modulated([c.r, c.g, c.b], l);
-                    let out = if BLEND {
-                        let old = F::unpack_masked(tile.color.get(idx), mask);
-                        mix(src, old, a >> 16, bias)
-                    } else {
-                        src.map(|v| v + bias)
-                    };
-                    if mask == F::MASK_ALL {
-                        tile.store::<false>(idx, x as u32, row.py as u32, out, mask);
-                    } else {
-                        tile.store::<true>(idx, x as u32, row.py as u32, out, mask);
+            let (mut x, mut idx) = (row.x0 as u32, first);
+            let mut n = (row.x1 - row.x0) as usize;
+            // Runs of pixels between the quadratic mode's segment ends
+            // (the whole span in the other modes), each stepping a copy of
+            // the span's state that lives in registers.
+            loop {
+                let run = sp.run::<MODE>(n);
+                let mut px = sp.px;
+                for _ in 0..run {
+                    let pass = tile.wid.pass(idx, st.wid)
+                        && if zwrite {
+                            tile.depth.test_and_set(idx, z)
+                        } else {
+                            tile.depth.test(idx, z)
+                        };
+                    if pass {
+                        let (u, v) = texmap::coords::<MODE>(ts, &px);
+                        let c = tex.sample(u, v);
+                        // The shade (8.16 on the 0..255 scale) as a fraction
+                        // of full scale (0.16): x 257/256 for / 255.
+                        let l = ((px.l.max(0) as u32 >> 8) * 257) >> 8;
+                        let src = F::lanes_modulated([c.r, c.g, c.b], l);
+                        let out = if BLEND {
+                            let old = F::unpack_masked(tile.color.get(idx), mask);
+                            mix(src, old, a >> 16, bias)
+                        } else {
+                            src.map(|v| v + bias)
+                        };
+                        if mask == F::MASK_ALL {
+                            tile.store::<false>(idx, x, row.py as u32, out, mask);
+                        } else {
+                            tile.store::<true>(idx, x, row.py as u32, out, mask);
+                        }
                     }
+                    texmap::step::<MODE>(&mut px);
+                    z += start.dz;
+                    a = a.wrapping_add(ga);
+                    idx += 1;
+                    x = x.wrapping_add(1);
                 }
-                texmap::step::<MODE>(ts, &mut sp);
-                z += start.dz;
-                a = a.wrapping_add(ga);
+                n -= run;
+                if n == 0 {
+                    break;
+                }
+                sp.px = px;
+                ts.next_segment(&mut sp);
             }
         }
     }
