@@ -622,7 +622,11 @@ impl MeshCursor<'_> {
         if (top + 1) * S > self.vertices.len() {
             return Err(Error::Malformed);
         }
-        let v = i.map(|i| self.vertex::<S>(i));
+        let v = [
+            self.vertex::<S>(i[0]),
+            self.vertex::<S>(i[1]),
+            self.vertex::<S>(i[2]),
+        ];
         Ok(Command::Triangle {
             v,
             state: self.state,
