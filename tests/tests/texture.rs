@@ -42,17 +42,18 @@ fn error(c: &Config, cmds: &[Command], tex: &[Texture<'_>], kind: TexKind) -> Te
     texel_error(&ours, &exact)
 }
 
-/// The tilted rectangle at depth ratios 1..8 on a 240x240 display (spans
+/// The tilted rectangle at depth ratios 1..64 on a 240x240 display (spans
 /// up to 216 pixels): the target — quadratic within half a texel
-/// wherever affine is off by more than two — and the exact mode within its
-/// bound everywhere.
+/// wherever affine is off by more than two (from ratio 16 on only because
+/// segments split where the depth changes fast) — and the exact mode
+/// within its bound everywhere.
 #[test]
 fn quadratic_perspective_holds_where_affine_fails() {
     let texels = ramp_texels();
     let tex = [ramp(&texels)];
     let c = cfg(240, 240, (240, 240));
     let mut affine_fails = 0;
-    for ratio in [1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0] {
+    for ratio in [1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 16.0, 32.0, 64.0] {
         let cmds = tilted_quad(240, 240, ratio);
         let [a, q, e] = TexKind::TEXTURED.map(|k| error(&c, &cmds, &tex, k));
         println!(
@@ -83,17 +84,22 @@ fn quadratic_perspective_holds_where_affine_fails() {
 }
 
 /// Every mode draws the same pixels whatever the tiling: spans are
-/// interpolated over the whole covered row.
+/// interpolated over the whole covered row (at ratio 40 the quadratic
+/// mode splits segments, and a tile entering a row mid-segment replays
+/// the splits).
 #[test]
 fn tiling_does_not_change_the_output() {
     let texels = ramp_texels();
     let tex = [ramp(&texels)];
-    let cmds = tilted_quad(96, 64, 5.0);
-    for kind in TexKind::TEXTURED {
+    for (ratio, kind) in [5.0, 40.0]
+        .into_iter()
+        .flat_map(|r| TexKind::TEXTURED.map(|k| (r, k)))
+    {
+        let cmds = tilted_quad(96, 64, ratio);
         let whole = render_textured(&cfg(96, 64, (96, 64)), &cmds, &tex, kind, 0).unwrap();
         for tile in [(16, 16), (33, 7), (1, 64), (96, 1)] {
             let t = render_textured(&cfg(96, 64, tile), &cmds, &tex, kind, 0).unwrap();
-            assert_eq!(t.raw, whole.raw, "{kind:?} tile {tile:?}");
+            assert_eq!(t.raw, whole.raw, "{kind:?} ratio {ratio} tile {tile:?}");
         }
     }
 }

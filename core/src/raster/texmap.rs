@@ -24,6 +24,14 @@
 //!   one quadratic over a 216-pixel span of a wall at depth ratio 3 is off
 //!   by a texel (measured, `tests/tests/texture.rs`), and the interpolation
 //!   error falls with the cube of the length;
+//! - a segment whose quadratic would miss by more than half a texel (an
+//!   estimate from its second difference and how fast `q` changes across
+//!   it, [`too_curved`]) is halved, down to 2 pixels: only where depth
+//!   changes fast (a 32-pixel segment with `q` 4:1 across 16 texels is off
+//!   by 1.78 texels whole, 0.16 in quarters). The decision depends on the
+//!   segment's exact samples alone and a tile entering a row replays the
+//!   segments from the grid column before it, so tiling still cannot
+//!   change a pixel;
 //! - the shade is linear along the span;
 //! - a span steps its coordinates in 32 bits, `I14.18` texels
 //!   ([`STEP_FRAC`]): the samples are exact, the steps rounded;
@@ -114,6 +122,11 @@ pub(crate) struct TexSpan {
     left: i32,
     next: i64,
     end: (i64, i64),
+    /// `q` at the segment's end ([`TexSetup::uvq`]).
+    end_q: i64,
+    /// The end of the last segment split (twice its offset from `xr`),
+    /// its exact coordinates and `q`: where a later segment ends.
+    far: (i64, (i64, i64), i64),
     n: i64,
     /// `xr` modulo [`SEGMENT`]: where the screen's segment grid falls.
     phase: i64,
@@ -185,15 +198,23 @@ impl TexSetup {
     #[inline(always)]
     pub(crate) fn uv<const PERSPECTIVE: bool>(&self, w: (i64, i64)) -> (i64, i64) {
         if PERSPECTIVE {
-            // s, t, q with 8 more fraction bits: s < 2^40, so s 2^20 fits,
-            // and q < 2^24 (exact quotients, rounded).
-            let f = |i: usize| (self.f0[i] << 8) + self.lerp(i, w, 22);
-            let (u, v) = div_round_pair(f(S) << 20, f(T) << 20, f(Q).max(1));
-            (u << 8, v << 8)
+            self.uvq(w).0
         } else {
             let f = |i: usize| (self.f0[i] << 28) + self.lerp(i, w, 2);
             (f(UA), f(VA))
         }
+    }
+
+    /// `(u, v)` as [`Self::uv`]'s perspective mode and the `q` they were
+    /// divided by (8 more fraction bits than the vertices', below 2^24).
+    #[inline(always)]
+    fn uvq(&self, w: (i64, i64)) -> ((i64, i64), i64) {
+        // s, t, q with 8 more fraction bits: s < 2^40, so s 2^20 fits,
+        // and q < 2^24 (exact quotients, rounded).
+        let f = |i: usize| (self.f0[i] << 8) + self.lerp(i, w, 22);
+        let q = f(Q).max(1);
+        let (u, v) = div_round_pair(f(S) << 20, f(T) << 20, q);
+        ((u << 8, v << 8), q)
     }
 
     /// The weights at offset `m2 / 2` pixels from the span start, whose
@@ -232,13 +253,20 @@ impl TexSetup {
             }
             PERSPECTIVE_QUADRATIC => {
                 s.phase = row.xr & (SEGMENT - 1);
-                let first = (((k + s.phase) & !(SEGMENT - 1)) - s.phase).max(0);
-                s.end = self.uv::<true>(if first == 0 {
+                let mut first = (((k + s.phase) & !(SEGMENT - 1)) - s.phase).max(0);
+                (s.end, s.end_q) = self.uvq(if first == 0 {
                     w0
                 } else {
                     self.at(e, 2 * first)
                 });
+                // The segments from the grid column before `k` on, as a
+                // tile entering there would have loaded them (a segment
+                // may have been split): the same integers in every tile.
                 self.segment(&mut s, first);
+                while s.left != i32::MAX && s.next <= k {
+                    first = s.next;
+                    self.segment(&mut s, first);
+                }
                 advance(&mut s.px.u, k - first);
                 advance(&mut s.px.v, k - first);
                 s.left -= (k - first) as i32;
@@ -264,7 +292,7 @@ impl TexSetup {
     #[cfg_attr(target_abi = "eabi", inline(never))]
     #[cfg_attr(not(target_abi = "eabi"), inline(always))]
     fn segment(&self, s: &mut TexSpan, first: i64) {
-        let m = (SEGMENT - ((first + s.phase) & (SEGMENT - 1))).min(s.n - first);
+        let mut m = (SEGMENT - ((first + s.phase) & (SEGMENT - 1))).min(s.n - first);
         if m <= 0 {
             let p = s.end;
             s.px.u = [to_step(p.0), 0, 0];
@@ -272,17 +300,41 @@ impl TexSetup {
             s.left = i32::MAX;
             return;
         }
-        let p0 = s.end;
-        let pm = self.uv::<true>(self.at(s.px.e, 2 * first + m));
-        let p1 = self.uv::<true>(self.at(s.px.e, 2 * (first + m)));
+        let (p0, q0) = (s.end, s.end_q);
+        let e = s.px.e;
+        let (mut pm, mut qm) = self.uvq(self.at(e, 2 * first + m));
+        let end = 2 * (first + m);
+        let (mut p1, mut q1) = if s.far.0 == end {
+            (s.far.1, s.far.2)
+        } else {
+            self.uvq(self.at(e, end))
+        };
+        // Halve the segment while its quadratic would miss the curve by
+        // more than half a texel ([`too_curved`]): only where the depth
+        // changes fast across it. An even segment's middle is its first
+        // half's end; the whole segment's end is kept for the segment that
+        // ends there next.
+        while m >= 2 * MIN_SPLIT && too_curved(p0, pm, p1, q0, q1) {
+            if 2 * (first + m) == end {
+                s.far = (end, p1, q1);
+            }
+            (p1, q1) = if m % 2 == 0 {
+                (pm, qm)
+            } else {
+                self.uvq(self.at(e, 2 * (first + m / 2)))
+            };
+            m /= 2;
+            (pm, qm) = self.uvq(self.at(e, 2 * first + m));
+        }
         // `d(0) = A + B = (2 c + m (f(m) - f(0) - 2 c)) / m^2`, `dd = 4 c / m^2`
         // with `c = f(0) - 2 f(m/2) + f(m)`: one rounding each, into
-        // STEP_FRAC (a shift for a whole segment).
+        // STEP_FRAC (a shift for a power-of-two length).
+        let pow2 = m.count_ones() == 1;
+        let b = 2 * m.trailing_zeros() + 32 - STEP_FRAC;
         let steps = |f0: i64, fm: i64, f1: i64| -> [i32; 3] {
             let c = f0 - 2 * fm + f1;
             let (n1, n2) = (2 * c + m * (f1 - f0 - 2 * c), 4 * c);
-            let (d1, d2) = if m == SEGMENT {
-                let b = 2 * SEGMENT_BITS + 32 - STEP_FRAC;
+            let (d1, d2) = if pow2 {
                 let r = |x: i64| (x + (1 << (b - 1))) >> b;
                 (r(n1), r(n2))
             } else {
@@ -293,10 +345,34 @@ impl TexSetup {
         };
         s.px.u = steps(p0.0, pm.0, p1.0);
         s.px.v = steps(p0.1, pm.1, p1.1);
-        s.end = p1;
+        (s.end, s.end_q) = (p1, q1);
         s.left = m as i32;
         s.next = first + m;
     }
+}
+
+/// The shortest segment a split leaves, pixels.
+const MIN_SPLIT: i64 = 2;
+
+/// Whether the quadratic through a segment's exact coordinates `p0`,
+/// `pm`, `p1` (32.32 texels) at its start, middle and end, where `q` runs
+/// from `q0` to `q1`, may miss the exact curve by more than half a texel.
+/// With `q` linear along the span, `u = a + b / q`, whose third
+/// derivative is `-3 u'' q' / q`; a quadratic through three points `h`
+/// apart misses by at most `|u'''| h^3 / (9 sqrt 3)`, so with the second
+/// difference `c = p0 - 2 pm + p1`, about `u'' h^2`, the error is about
+/// `0.19 |c| rho` with `rho = |q1 - q0| / (2 min q)`. The estimate runs
+/// about 1.5x above the true error (a 32-pixel segment with `q` 4:1
+/// across 16 texels: estimated 2.7, true 1.78 texels), so a segment it
+/// keeps whole stays within about a third of a texel. `c` is taken in
+/// 2^-16 texels.
+#[inline(always)]
+fn too_curved(p0: (i64, i64), pm: (i64, i64), p1: (i64, i64), q0: i64, q1: i64) -> bool {
+    let c = |a: i64, m: i64, b: i64| ((a - 2 * m + b).unsigned_abs() >> 16).min(u32::MAX as u64);
+    let c = c(p0.0, pm.0, p1.0).max(c(p0.1, pm.1, p1.1));
+    // 0.095 |c| |q1 - q0| / min q > 1/2 in integers: c < 2^32 and q < 2^24,
+    // so neither side passes 2^61.
+    c * q0.abs_diff(q1) * 19 > (q0.min(q1) as u64 * 100) << 16
 }
 
 /// A coordinate's state `[f, d, dd]` advanced `k` steps in closed form:

@@ -311,13 +311,19 @@ where
             let (mut z, mut a) = (start.z + (1 << (Z_FRAC - 1)), a.wrapping_add(1 << 15));
             let (mut x, mut idx) = (row.x0 as u32, first);
             let mut n = (row.x1 - row.x0) as usize;
+            // Spans are clipped to the tile: saying so lets the compiler
+            // drop the planes' per-pixel index checks.
+            debug_assert!(first + n <= Self::CAPACITY);
+            if first + n > Self::CAPACITY {
+                continue;
+            }
             // Runs of pixels between the quadratic mode's segment ends
             // (the whole span in the other modes), each stepping a copy of
             // the span's state that lives in registers.
             loop {
                 let run = sp.run::<MODE>(n);
                 let mut px = sp.px;
-                for _ in 0..run {
+                for idx in idx..idx + run {
                     let pass = tile.wid.pass(idx, st.wid)
                         && if zwrite {
                             tile.depth.test_and_set(idx, z)
@@ -344,11 +350,11 @@ where
                         }
                     }
                     texmap::step::<MODE>(&mut px);
-                    z += start.dz;
+                    z = z.wrapping_add(start.dz);
                     a = a.wrapping_add(ga);
-                    idx += 1;
                     x = x.wrapping_add(1);
                 }
+                idx += run;
                 n -= run;
                 if n == 0 {
                     break;
@@ -753,7 +759,7 @@ where
     #[allow(clippy::too_many_arguments)]
     fn span_loop<const MODE: u8, const MASKED: bool>(
         &mut self,
-        mut idx: usize,
+        idx: usize,
         mut x: u32,
         y: u32,
         n: usize,
@@ -766,7 +772,15 @@ where
         let (mut c, mut dc, mut z) = (s.c, s.dc, s.z);
         let end = idx + n;
         let blend = MODE & !QUAD_STEP;
-        loop {
+        // Callers clip every span to the tile; saying so here lets the
+        // compiler drop the per-pixel index checks of the planes.
+        debug_assert!(end <= Self::CAPACITY);
+        if end > Self::CAPACITY {
+            return;
+        }
+        // The state steps after every pixel, the last one too (a dead
+        // step: cheaper than a second exit test).
+        for idx in idx..end {
             let pass = self.wid.pass(idx, wid)
                 && match blend {
                     BLEND_NO_Z => true,
@@ -787,16 +801,12 @@ where
                 };
                 self.store::<MASKED>(idx, x, y, v, mask);
             }
-            idx += 1;
-            if idx == end {
-                break;
-            }
             x = x.wrapping_add(1);
             c = c.zip(dc, |v, d| v.wrapping_add(d));
             if MODE & QUAD_STEP != 0 {
                 dc = dc.zip(ddc, |d, dd| d.wrapping_add(dd));
             }
-            z += s.dz;
+            z = z.wrapping_add(s.dz);
             if blend != OPAQUE {
                 a = a.wrapping_add(da);
             }
