@@ -30,7 +30,7 @@
 use crate::format::{Lanes, PixelFormat};
 use crate::geom::Rect;
 use crate::geom::{pixel_bounds, QuadVertex, Vertex};
-use crate::numeric::{Divisor, COLOR_FRAC, SUBPIXEL, SUBPIXEL_BITS, W_FRAC, Z_FRAC};
+use crate::numeric::{pairs, Divisor, COLOR_FRAC, SUBPIXEL, SUBPIXEL_BITS, W_FRAC, Z_FRAC};
 
 /// One edge as a function of pixel indices: `E(px, py) = a px + b0 + step py`.
 #[derive(Debug, Clone, Copy)]
@@ -702,36 +702,9 @@ impl<L: Lanes> QuadPlane<L> {
     }
 }
 
-/// `k (k - 1) / 2` modulo 2^32 (the pixel pairs `k` forward-difference
-/// steps add `ddc` over) in one 32-bit product: the even factor halved
-/// first, `k >> 1` times `k - 1` (`k` even) or `k` (`k` odd), which is
-/// `(k - 1) | 1` either way. The 64-bit product and halving it replaces
-/// took twelve instructions a row on the M4; the M0 has no 64-bit multiply.
-#[inline(always)]
-fn pairs(k: i32) -> i32 {
-    (k >> 1).wrapping_mul(k.wrapping_sub(1) | 1)
-}
-
 #[cfg(test)]
 mod tests {
-    use super::{alpha_weight, pairs};
-
-    #[test]
-    fn pairs_is_the_halved_product_modulo_2_32() {
-        let edges = [
-            i32::MIN,
-            i32::MIN + 1,
-            i32::MIN + 2,
-            -65_537,
-            65_536,
-            92_682,
-            i32::MAX,
-        ];
-        for k in (-70_000..70_000).chain(edges) {
-            let exact = (k as i64 * (k as i64 - 1) / 2) as i32;
-            assert_eq!(pairs(k), exact, "{k}");
-        }
-    }
+    use super::alpha_weight;
 
     #[test]
     fn alpha_weight_is_the_rounded_quotient() {

@@ -46,7 +46,7 @@
 //! the quotients are the same integers on every chip.
 
 use crate::format::Lanes;
-use crate::numeric::{div_round_pair, Divisor, W_FRAC};
+use crate::numeric::{div_round_pair, pairs, Divisor, W_FRAC};
 use crate::raster::traverse::Row;
 use crate::setup::{EdgeInt, TriangleSetup};
 use crate::texture::{TexVertex, PERSPECTIVE_EXACT, PERSPECTIVE_QUADRATIC};
@@ -379,7 +379,7 @@ fn too_curved(p0: (i64, i64), pm: (i64, i64), p1: (i64, i64), q0: i64, q1: i64) 
 /// the same integers `k` steps reach (modulo 2^32).
 #[inline(always)]
 fn advance(f: &mut [i32; 3], k: i64) {
-    let (k, tri) = (k as i32, (k * (k - 1) / 2) as i32);
+    let (k, tri) = (k as i32, pairs(k as i32));
     f[0] = f[0]
         .wrapping_add(k.wrapping_mul(f[1]))
         .wrapping_add(tri.wrapping_mul(f[2]));
