@@ -29,6 +29,9 @@
 //!   miss by more than half a texel (fast depth change) is halved, down to
 //!   2 pixels, so the error stays below half a texel at any depth ratio
 //!   (measured to 64:1) and costs extra only where the depth demands it.
+//!   The tolerance is the mode's parameter (`QuadraticTexturing<TOL>`,
+//!   eighths of a texel): looser is cheaper, [`NEVER_SPLIT`] is the seed's
+//!   plain 32-pixel segments.
 //!   Segments depend on the covered row alone, whatever the tiling, so
 //!   tiles cannot change the output;
 //! - [`ExactTexturing`]: `s / q`, `t / q` divided at every pixel.
@@ -328,7 +331,18 @@ pub trait TextureMode: 'static {
     /// [`PERSPECTIVE_AFFINE`], [`PERSPECTIVE_QUADRATIC`],
     /// [`PERSPECTIVE_EXACT`].
     const MODE: u8;
+    /// The quadratic mode's tolerance in eighths of a texel: a segment
+    /// whose quadratic the estimate says may miss by more is halved
+    /// ([`QuadraticTexturing`]'s parameter; the other modes ignore it).
+    const TOLERANCE: u32 = QUADRATIC_TOLERANCE;
 }
+
+/// [`QuadraticTexturing`]'s default tolerance, eighths of a texel: half a
+/// texel, the seed's accuracy target.
+pub const QUADRATIC_TOLERANCE: u32 = 4;
+/// A tolerance no segment exceeds: the quadratic mode never splits (one
+/// segment per 32 screen columns, the seed's own scheme).
+pub const NEVER_SPLIT: u32 = u16::MAX as u32;
 
 /// No texturing compiled: a textured triangle draws its shade, grey.
 pub const PERSPECTIVE_NONE: u8 = 0;
@@ -346,9 +360,23 @@ pub struct NoTexturing;
 #[derive(Debug, Clone, Copy, Default)]
 pub struct AffineTexturing;
 /// Perspective by quadratic interpolation along each span, the RE's
-/// ([module docs](self)).
+/// ([module docs](self)), within `TOL` eighths of a texel (default half a
+/// texel): the speed-against-accuracy knob of the mode. A larger `TOL`
+/// splits fewer segments (fewer exact samples); [`NEVER_SPLIT`] keeps every
+/// 32-pixel segment whole. Measured on both axes in `reports/texture.md`
+/// and `reports/targets.md`.
+///
+/// ```
+/// use tilerast::prelude::*;
+/// use tilerast::texture::NEVER_SPLIT;
+/// // Within two texels: cheaper where the depth changes fast.
+/// type Loose = Planes<Rgb565Format, Depth16, NoWid, NoDither, NoAa, FullPrecision,
+///     NoBlending, GouraudShading, QuadraticTexturing<16>>;
+/// type Seed = QuadraticTexturing<NEVER_SPLIT>;
+/// # let _ = (core::marker::PhantomData::<Loose>, core::marker::PhantomData::<Seed>);
+/// ```
 #[derive(Debug, Clone, Copy, Default)]
-pub struct QuadraticTexturing;
+pub struct QuadraticTexturing<const TOL: u32 = QUADRATIC_TOLERANCE>;
 /// Perspective by a division at every pixel ([module docs](self)).
 #[derive(Debug, Clone, Copy, Default)]
 pub struct ExactTexturing;
@@ -359,8 +387,15 @@ impl TextureMode for NoTexturing {
 impl TextureMode for AffineTexturing {
     const MODE: u8 = PERSPECTIVE_AFFINE;
 }
-impl TextureMode for QuadraticTexturing {
+impl<const TOL: u32> TextureMode for QuadraticTexturing<TOL> {
     const MODE: u8 = PERSPECTIVE_QUADRATIC;
+    const TOLERANCE: u32 = {
+        assert!(
+            TOL >= 1 && TOL <= NEVER_SPLIT,
+            "TOL: 1..=NEVER_SPLIT eighths"
+        );
+        TOL
+    };
 }
 impl TextureMode for ExactTexturing {
     const MODE: u8 = PERSPECTIVE_EXACT;

@@ -457,11 +457,28 @@ pub enum TexKind {
     Quadratic,
     /// A division per pixel.
     Exact,
+    /// The quadratic within two texels (`QuadraticTexturing<16>`): fewer
+    /// segments split.
+    #[serde(rename = "quadratic-2")]
+    #[value(name = "quadratic-2")]
+    Quadratic2,
+    /// The quadratic never split (`QuadraticTexturing<NEVER_SPLIT>`): the
+    /// seed's plain 32-pixel segments.
+    #[serde(rename = "quadratic-nosplit")]
+    #[value(name = "quadratic-nosplit")]
+    QuadraticNoSplit,
 }
 
 impl TexKind {
     /// The three modes that texture.
     pub const TEXTURED: [TexKind; 3] = [TexKind::Affine, TexKind::Quadratic, TexKind::Exact];
+    /// The quadratic mode's tolerance knob: half a texel (the default), two
+    /// texels, never split (RGB888 and RGB565 only).
+    pub const TOLERANCES: [TexKind; 3] = [
+        TexKind::Quadratic,
+        TexKind::Quadratic2,
+        TexKind::QuadraticNoSplit,
+    ];
     /// The name on the command line and in reports.
     pub fn name(self) -> &'static str {
         match self {
@@ -469,6 +486,8 @@ impl TexKind {
             TexKind::Affine => "affine",
             TexKind::Quadratic => "quadratic",
             TexKind::Exact => "exact",
+            TexKind::Quadratic2 => "quadratic-2",
+            TexKind::QuadraticNoSplit => "quadratic-nosplit",
         }
     }
 }
@@ -477,7 +496,8 @@ impl TexKind {
 /// them) in perspective mode `kind`, timing `runs` renders first like
 /// [`render_timed`]. Textured scenes are built with a 16-bit Z plane, no
 /// window-ID plane, no coverage antialiasing and dither 0 or 4 (other
-/// configurations: [`Error::BadSize`]); with [`TexKind::None`] it is
+/// configurations: [`Error::BadSize`]; the tolerance variants
+/// [`TexKind::TOLERANCES`] also need RGB888 or RGB565); with [`TexKind::None`] it is
 /// [`render_timed`], textures unused.
 pub fn render_textured(
     cfg: &Config,
@@ -502,7 +522,9 @@ pub fn render_textured(
             _ => Err(Error::BadSize),
         }
     }
-    fn by_format<X: TextureMode>(
+    /// RGB888 and RGB565 (all the tolerance knob's variants compile: each
+    /// configuration is a copy of the draw code).
+    fn by_rgb<X: TextureMode>(
         cfg: &Config,
         src: &WithTextures<'_, [Command]>,
         runs: usize,
@@ -510,9 +532,20 @@ pub fn render_textured(
         match cfg.format {
             FormatKind::Rgb888 => by_dither::<Rgb888Format, X>(cfg, src, runs),
             FormatKind::Rgb565 => by_dither::<Rgb565Format, X>(cfg, src, runs),
+            _ => Err(Error::BadSize),
+        }
+    }
+    /// Every format.
+    fn by_format<X: TextureMode>(
+        cfg: &Config,
+        src: &WithTextures<'_, [Command]>,
+        runs: usize,
+    ) -> Result<Rendered, Error> {
+        match cfg.format {
             FormatKind::Rgb444 => by_dither::<Rgb444Format, X>(cfg, src, runs),
             FormatKind::Gray8 => by_dither::<Gray8Format, X>(cfg, src, runs),
             FormatKind::Binary => by_dither::<BinaryFormat, X>(cfg, src, runs),
+            FormatKind::Rgb888 | FormatKind::Rgb565 => by_rgb::<X>(cfg, src, runs),
         }
     }
     if kind == TexKind::None {
@@ -526,6 +559,10 @@ pub fn render_textured(
         TexKind::None | TexKind::Affine => by_format::<AffineTexturing>(cfg, &src, runs),
         TexKind::Quadratic => by_format::<QuadraticTexturing>(cfg, &src, runs),
         TexKind::Exact => by_format::<ExactTexturing>(cfg, &src, runs),
+        TexKind::Quadratic2 => by_rgb::<QuadraticTexturing<16>>(cfg, &src, runs),
+        TexKind::QuadraticNoSplit => {
+            by_rgb::<QuadraticTexturing<{ tilerast::texture::NEVER_SPLIT }>>(cfg, &src, runs)
+        }
     }
 }
 

@@ -40,15 +40,25 @@ pub const AFFINE_FAILS: f64 = 2.0;
 /// Display side.
 const SIDE: u16 = 240;
 
-/// One depth ratio's measurements, per mode in [`TexKind::TEXTURED`] order.
+/// The modes measured: [`TexKind::TEXTURED`], then the quadratic's
+/// looser tolerances (two texels, never split).
+pub const MODES: [TexKind; 5] = [
+    TexKind::Affine,
+    TexKind::Quadratic,
+    TexKind::Exact,
+    TexKind::Quadratic2,
+    TexKind::QuadraticNoSplit,
+];
+
+/// One depth ratio's measurements, per mode in [`MODES`] order.
 #[derive(Debug, Clone)]
 pub struct Row {
     /// Far depth over near depth.
     pub ratio: f64,
     /// Texel error per mode.
-    pub error: [TexelError; 3],
+    pub error: [TexelError; 5],
     /// Host ns per covered pixel per mode.
-    pub ns: [f64; 3],
+    pub ns: [f64; 5],
 }
 
 fn config() -> Config {
@@ -77,10 +87,10 @@ pub fn run(runs: usize) -> Result<Vec<Row>, String> {
             let exact = reference::render_textured(&cfg, &cmds, &tex);
             let mut row = Row {
                 ratio,
-                error: [TexelError::default(); 3],
-                ns: [0.0; 3],
+                error: [TexelError::default(); 5],
+                ns: [0.0; 5],
             };
-            for (k, kind) in TexKind::TEXTURED.into_iter().enumerate() {
+            for (k, kind) in MODES.into_iter().enumerate() {
                 let r = render_textured(&cfg, &cmds, &tex, kind, runs).map_err(err)?;
                 row.error[k] = texel_error(&r, &exact);
                 let screen = SIDE as f64 * SIDE as f64;
@@ -102,16 +112,21 @@ pub fn report(rows: &[Row], chart: &Path, pictures: &Path) -> String {
          their coordinates (bilinear, clamped): error in texels against the exact f64 \
          mapping, per covered pixel; host ns per covered pixel (median). Quadratic: per \
          segment of 32 px (halved where its quadratic would miss by more than half a \
-         texel), the quadratic through the exact coordinates at its ends and middle. Firmware instructions per pixel: `reports/targets.md`.\n\n\
+         texel), the quadratic through the exact coordinates at its ends and middle. The \
+         tolerance is the mode's knob (`QuadraticTexturing<TOL>`, eighths of a texel): \
+         `quadratic-2` splits only past two texels, `quadratic-nosplit` never (the seed's \
+         plain 32-px segments). Firmware instructions per pixel: `reports/targets.md`.\n\n\
          | depth ratio | affine max | affine mean | quadratic max | quadratic mean | exact max | \
-         affine ns/px | quadratic ns/px | exact ns/px |\n\
-         | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+         quadratic-2 max | quadratic-nosplit max | \
+         affine ns/px | quadratic ns/px | exact ns/px | quadratic-2 ns/px | quadratic-nosplit ns/px |\n\
+         | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
     );
     for r in rows {
-        let [a, q, e] = r.error;
+        let [a, q, e, q2, qn] = r.error;
         md += &format!(
-            "| {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} | {:.2} |\n",
-            r.ratio, a.max, a.mean, q.max, q.mean, e.max, r.ns[0], r.ns[1], r.ns[2]
+            "| {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} |\n",
+            r.ratio, a.max, a.mean, q.max, q.mean, e.max, q2.max, qn.max,
+            r.ns[0], r.ns[1], r.ns[2], r.ns[3], r.ns[4]
         );
     }
     let fails: Vec<&Row> = rows
@@ -142,6 +157,8 @@ pub fn chart(rows: &[Row]) -> Result<Image, String> {
         RGBColor(200, 60, 40),
         RGBColor(30, 110, 200),
         RGBColor(40, 160, 80),
+        RGBColor(120, 160, 230),
+        RGBColor(150, 90, 190),
     ];
     let top = rows
         .iter()
@@ -165,7 +182,7 @@ pub fn chart(rows: &[Row]) -> Result<Image, String> {
             .label_style((SANS, 12))
             .draw()
             .map_err(err)?;
-        for (k, kind) in TexKind::TEXTURED.iter().enumerate() {
+        for (k, kind) in MODES.iter().enumerate() {
             let c = colors[k];
             let pts: Vec<(f64, f64)> = rows
                 .iter()

@@ -11,6 +11,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command as Process;
 use tilerast::prelude::{AffineTexturing, ExactTexturing, QuadraticTexturing};
+use tilerast::texture::NEVER_SPLIT;
 use tilerast_fw::report::{scene_crc, Demo, SceneKind, Ssd1306, Teapot};
 use tilerast_fw::workloads::{self, FILL_CMDS, LARGE_TRIANGLE_CMDS, LINE_CMDS, TRIANGLE_CMDS};
 use tilerast_sim::Scene;
@@ -517,8 +518,8 @@ fn firmware_output_is_bit_identical_to_the_host() {
             );
             r.benches.extend(b1.benches);
             r.bench_crcs.extend(b1.bench_crcs);
-            // And the area-sampling workload, another.
-            let area = parse(&run(board, &build(board, &scenes, Some("bench_area"))));
+            // And the area-sampling and texture-tolerance workloads, another.
+            let area = parse(&run(board, &build(board, &scenes, Some("bench_extra"))));
             r.benches.extend(area.benches);
             r.bench_crcs.extend(area.bench_crcs);
         }
@@ -550,6 +551,18 @@ fn firmware_output_is_bit_identical_to_the_host() {
             (
                 "large_tex_exact_z_rgb565",
                 host_bench_crc::<workloads::TexBench<ExactTexturing>>(&workloads::LARGE_TEX_CMDS),
+            ),
+            (
+                "large_tex_quadratic_2texel_z_rgb565",
+                host_bench_crc::<workloads::TexBench<QuadraticTexturing<16>>>(
+                    &workloads::LARGE_TEX_CMDS,
+                ),
+            ),
+            (
+                "large_tex_quadratic_nosplit_z_rgb565",
+                host_bench_crc::<workloads::TexBench<QuadraticTexturing<NEVER_SPLIT>>>(
+                    &workloads::LARGE_TEX_CMDS,
+                ),
             ),
         ] {
             let crc = r.bench_crcs[name];
@@ -797,6 +810,16 @@ fn report(reports: &[BoardResult]) -> String {
             large_px,
         ),
         (
+            "the same, quadratic within two texels (`QuadraticTexturing<16>`)",
+            "large_tex_quadratic_2texel_z_rgb565",
+            large_px,
+        ),
+        (
+            "the same, quadratic never split (`QuadraticTexturing<NEVER_SPLIT>`, the seed's 32-px segments)",
+            "large_tex_quadratic_nosplit_z_rgb565",
+            large_px,
+        ),
+        (
             "exact Phong's per-pixel arithmetic alone (normalise + light + pack, no raster, no Z), f32",
             "exact_phong_f32_rgb565",
             large_px,
@@ -827,6 +850,14 @@ fn report(reports: &[BoardResult]) -> String {
         let r = b.benches["large_tex_quadratic_z_rgb565"] as f64
             / b.benches["large_tex_affine_z_rgb565"] as f64;
         md += &format!(" {r:.2} |");
+    }
+    md += "\n";
+    md += "| **ratio** quadratic within two texels / affine; never split / affine |";
+    for b in &boards {
+        let affine = b.benches["large_tex_affine_z_rgb565"] as f64;
+        let two = b.benches["large_tex_quadratic_2texel_z_rgb565"] as f64 / affine;
+        let never = b.benches["large_tex_quadratic_nosplit_z_rgb565"] as f64 / affine;
+        md += &format!(" {two:.2}; {never:.2} |");
     }
     md += "\n";
     md += "| **ratio** quadratic / exact texturing (target ≤ 0.5 on the M0) |";

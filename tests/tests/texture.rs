@@ -83,7 +83,37 @@ fn quadratic_perspective_holds_where_affine_fails() {
     );
 }
 
-/// Every mode draws the same pixels whatever the tiling: spans are
+/// The quadratic mode's tolerance knob ([`TexKind::TOLERANCES`]): within
+/// two texels the error stays below two texels at every depth ratio to
+/// 64 (and its largest exceeds the half-texel default's); never split
+/// (the seed's plain 32-pixel segments), it passes half a texel where the
+/// depth changes fast, which is why the default splits.
+#[test]
+fn the_tolerance_knob_trades_texels_for_segments() {
+    let texels = ramp_texels();
+    let tex = [ramp(&texels)];
+    let c = cfg(240, 240, (240, 240));
+    let mut worst = [0.0f64; 3];
+    for ratio in [1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0] {
+        let cmds = tilted_quad(240, 240, ratio);
+        let [half, two, never] = TexKind::TOLERANCES.map(|k| error(&c, &cmds, &tex, k));
+        println!(
+            "ratio {ratio}: quadratic max {:.3} (0.5 texel), {:.3} (2 texels), {:.3} (never split)",
+            half.max, two.max, never.max
+        );
+        assert!(half.max <= 0.5, "ratio {ratio}: {half:?}");
+        assert!(two.max <= 2.0, "ratio {ratio}: {two:?}");
+        for (w, e) in worst.iter_mut().zip([half, two, never]) {
+            *w = w.max(e.max);
+        }
+    }
+    assert!(
+        worst[0] < worst[1] && worst[1] <= worst[2] && worst[2] > 0.5,
+        "the looser, the larger the error: {worst:?}"
+    );
+}
+
+/// Every mode (and tolerance) draws the same pixels whatever the tiling: spans are
 /// interpolated over the whole covered row (at ratio 40 the quadratic
 /// mode splits segments, and a tile entering a row mid-segment replays
 /// the splits).
@@ -91,9 +121,10 @@ fn quadratic_perspective_holds_where_affine_fails() {
 fn tiling_does_not_change_the_output() {
     let texels = ramp_texels();
     let tex = [ramp(&texels)];
+    let kinds = [TexKind::TEXTURED, TexKind::TOLERANCES].concat();
     for (ratio, kind) in [5.0, 40.0]
         .into_iter()
-        .flat_map(|r| TexKind::TEXTURED.map(|k| (r, k)))
+        .flat_map(|r| kinds.iter().map(move |&k| (r, k)))
     {
         let cmds = tilted_quad(96, 64, ratio);
         let whole = render_textured(&cfg(96, 64, (96, 64)), &cmds, &tex, kind, 0).unwrap();

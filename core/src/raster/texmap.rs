@@ -64,6 +64,9 @@ pub(crate) struct TexSetup {
     /// `2^62 / area2`: the weights' scale (the Gouraud setup computes it
     /// only for the configurations that restart rows exactly).
     inv: i64,
+    /// The quadratic mode's split tolerance ([`too_curved`]), eighths of
+    /// a texel.
+    tol: u32,
 }
 
 /// Indices into [`TexSetup`]'s attributes.
@@ -151,6 +154,7 @@ impl TexSetup {
         tv: &[TexVertex; 3],
         shade: &[u8; 3],
         t: &TriangleSetup<Ln, Tn>,
+        tol: u32,
     ) -> Self {
         let attr = |k: usize| {
             let (v, q) = (&tv[k], tv[k].q as i64);
@@ -173,6 +177,7 @@ impl TexSetup {
             ],
             a: [t.e[1].a.to_i64(), t.e[2].a.to_i64()],
             inv: (1i64 << 62) / t.area2,
+            tol,
         }
     }
 
@@ -314,7 +319,7 @@ impl TexSetup {
         // changes fast across it. An even segment's middle is its first
         // half's end; the whole segment's end is kept for the segment that
         // ends there next.
-        while m >= 2 * MIN_SPLIT && too_curved(p0, pm, p1, q0, q1) {
+        while m >= 2 * MIN_SPLIT && too_curved(p0, pm, p1, q0, q1, self.tol) {
             if 2 * (first + m) == end {
                 s.far = (end, p1, q1);
             }
@@ -356,7 +361,8 @@ const MIN_SPLIT: i64 = 2;
 
 /// Whether the quadratic through a segment's exact coordinates `p0`,
 /// `pm`, `p1` (32.32 texels) at its start, middle and end, where `q` runs
-/// from `q0` to `q1`, may miss the exact curve by more than half a texel.
+/// from `q0` to `q1`, may miss the exact curve by more than `tol` eighths
+/// of a texel (half a texel by default).
 /// With `q` linear along the span, `u = a + b / q`, whose third
 /// derivative is `-3 u'' q' / q`; a quadratic through three points `h`
 /// apart misses by at most `|u'''| h^3 / (9 sqrt 3)`, so with the second
@@ -367,12 +373,12 @@ const MIN_SPLIT: i64 = 2;
 /// keeps whole stays within about a third of a texel. `c` is taken in
 /// 2^-16 texels.
 #[inline(always)]
-fn too_curved(p0: (i64, i64), pm: (i64, i64), p1: (i64, i64), q0: i64, q1: i64) -> bool {
+fn too_curved(p0: (i64, i64), pm: (i64, i64), p1: (i64, i64), q0: i64, q1: i64, tol: u32) -> bool {
     let c = |a: i64, m: i64, b: i64| ((a - 2 * m + b).unsigned_abs() >> 16).min(u32::MAX as u64);
     let c = c(p0.0, pm.0, p1.0).max(c(p0.1, pm.1, p1.1));
-    // 0.095 |c| |q1 - q0| / min q > 1/2 in integers: c < 2^32 and q < 2^24,
-    // so neither side passes 2^61.
-    c * q0.abs_diff(q1) * 19 > (q0.min(q1) as u64 * 100) << 16
+    // 0.095 |c| |q1 - q0| / min q > tol / 8 in integers: c < 2^32,
+    // q < 2^24 and tol < 2^16, so neither side passes 2^61.
+    c * q0.abs_diff(q1) * 19 > (q0.min(q1) as u64 * 25 * tol as u64) << 16
 }
 
 /// A coordinate's state `[f, d, dd]` advanced `k` steps in closed form:
@@ -481,7 +487,7 @@ mod tests {
                         let fx = |x: f64| (u(x) * 4294967296.0).round() as i64;
                         let p = |x: f64| (fx(x), fx(x) / 2);
                         let (q0, q1) = (q(a).round() as i64, q(a + l).round() as i64);
-                        let split = too_curved(p(a), p(a + l / 2.0), p(a + l), q0, q1);
+                        let split = too_curved(p(a), p(a + l / 2.0), p(a + l), q0, q1, 4);
                         let miss = quadratic_miss(&u, a, l);
                         if split {
                             assert!(miss > 0.2, "{texels} {ratio} [{a}, +{l}]: {miss}");
@@ -508,6 +514,7 @@ mod tests {
                 fx(32.0),
                 q(a) as i64,
                 q(32.0) as i64,
+                4,
             )
         };
         assert!((quadratic_miss(&u, 0.0, 32.0) - 1.78).abs() < 0.01);

@@ -254,7 +254,7 @@ where
         // flash beside the other workloads.
         let blend = B::ALPHA && st.blend.translucent();
         if let Some(t) = TriangleSetup::<_, i64>::new::<F>(v, blend) {
-            self.textured_setup(&t, &TexSetup::new(tv, shade, &t), tex, st);
+            self.textured_setup(&t, &TexSetup::new(tv, shade, &t, X::TOLERANCE), tex, st);
         }
     }
 

@@ -121,8 +121,8 @@ pub fn run<const ND: usize, const NS: usize, const BC: usize, const BT: usize>(
         )?;
         #[cfg(feature = "bench")]
         crate::report::report_benches(&mut out, &mut clock)?;
-        #[cfg(feature = "bench_area")]
-        crate::report::report_area_bench(&mut out, &mut clock)?;
+        #[cfg(feature = "bench_extra")]
+        crate::report::report_extra_benches(&mut out, &mut clock)?;
         #[cfg(feature = "anim")]
         crate::report::report_anim(&mut out, &mut clock)?;
         #[cfg(feature = "volume")]

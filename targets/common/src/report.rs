@@ -237,15 +237,33 @@ fn bench_one<C: TileConfig>(
     }
 }
 
-/// Prints the area-sampling workload (seed 001 §IV.5: the small triangles
-/// with every edge flagged, [`workloads::AreaAaBench`]). A feature of its
-/// own (`bench_area`): on the micro:bit it is a build of its own, since the
-/// other workloads fill the 256 KB of flash.
-pub fn report_area_bench(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt::Result {
+/// Prints the workloads that do not fit beside the others on the
+/// micro:bit (feature `bench_extra`, a build of its own there: each tile
+/// configuration is a copy of the draw code): area sampling (seed 001
+/// §IV.5: the small triangles with every edge flagged,
+/// [`workloads::AreaAaBench`]) and the quadratic texture mode's tolerance
+/// knob, within two texels and never split (the seed's plain 32-pixel
+/// segments), on the textured walls.
+pub fn report_extra_benches(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt::Result {
     bench_one::<workloads::AreaAaBench>(
         "gouraud_z_area_aa_rgb565",
         &AREA_AA_CMDS,
         Via::Ours,
+        out,
+        clock,
+    )?;
+    let tex: &[Command] = &LARGE_TEX_CMDS;
+    bench_one::<workloads::TexBench<QuadraticTexturing<16>>>(
+        "large_tex_quadratic_2texel_z_rgb565",
+        tex,
+        Via::Textured,
+        out,
+        clock,
+    )?;
+    bench_one::<workloads::TexBench<QuadraticTexturing<{ tilerast::texture::NEVER_SPLIT }>>>(
+        "large_tex_quadratic_nosplit_z_rgb565",
+        tex,
+        Via::Textured,
         out,
         clock,
     )
