@@ -13,6 +13,14 @@
 //! alone overflows the bins replays the whole list (the unbinned path). [`FrameStats`](crate::frame::FrameStats) counts both. `Bins<0, 0>`
 //! costs nothing and always takes the unbinned path.
 //!
+//! A band's tiles and their entry counts are known before its pass, so a
+//! band does not link its entries: it lays each tile's keys out flat, where
+//! the counts put them (a counting sort), in the link words too — `2 CAP`
+//! entries a band, half as many passes (the micro:bit's demo frame: 12
+//! passes before, measured in `reports/targets.md` now). Binning reads
+//! only what it needs of each command ([`CommandSource::each_bounds`](crate::frame::CommandSource::each_bounds)):
+//! an encoded mesh's triangles, their vertices' positions.
+//!
 //! Entries are appended in command order, so a tile replays its commands in
 //! list order and binning cannot change a pixel.
 
@@ -45,6 +53,10 @@ pub struct Bins<const CAP: usize, const TILES: usize> {
     key: [u32; CAP],
     next: [u32; CAP],
     len: usize,
+    /// Whether the lists are flat ([`Self::reset_flat`]): tile `t`'s keys
+    /// fill slots `tail[t - 1]..head[t]` of the `2 CAP` slots of `key` and
+    /// `next` together (`head` is its write cursor, `tail` its end).
+    flat: bool,
 }
 
 impl<const CAP: usize, const TILES: usize> Default for Bins<CAP, TILES> {
@@ -67,6 +79,7 @@ impl<const CAP: usize, const TILES: usize> Bins<CAP, TILES> {
             key: [0; CAP],
             next: [NONE; CAP],
             len: 0,
+            flat: false,
         }
     }
 
@@ -81,6 +94,32 @@ impl<const CAP: usize, const TILES: usize> Bins<CAP, TILES> {
         self.head[..tiles].fill(NONE);
         self.tail[..tiles].fill(NONE);
         self.len = 0;
+        self.flat = false;
+    }
+
+    /// Empties the lists of the first `tiles` tiles as flat lists sized by
+    /// the plan from its tile `from` on ([`Self::keep_plan`]): a counting
+    /// sort, no link per entry, so a band holds `2 CAP` entries (its tiles
+    /// are chosen by [`Self::plan_fit`]).
+    pub(crate) fn reset_flat(&mut self, from: usize, tiles: usize) {
+        let mut end = 0;
+        for t in 0..tiles {
+            self.head[t] = end;
+            end += self.plan[from + t];
+            self.tail[t] = end;
+        }
+        self.count[..tiles].fill(0);
+        self.len = end as usize;
+        self.flat = true;
+    }
+
+    /// Slot `i` of the flat lists (`i < 2 CAP`).
+    #[inline(always)]
+    fn slot(&mut self, i: usize) -> Option<&mut u32> {
+        match i.checked_sub(CAP) {
+            None => self.key.get_mut(i),
+            Some(j) => self.next.get_mut(j),
+        }
     }
 
     /// Entries used.
@@ -93,6 +132,14 @@ impl<const CAP: usize, const TILES: usize> Bins<CAP, TILES> {
     #[inline]
     pub(crate) fn push(&mut self, t: usize, key: u32) -> bool {
         self.count[t] += 1;
+        if self.flat {
+            let at = self.head[t];
+            if at >= self.tail[t] {
+                return false;
+            }
+            self.head[t] = at + 1;
+            return self.slot(at as usize).map(|s| *s = key).is_some();
+        }
         let n = self.len;
         if n >= CAP {
             return false;
@@ -113,22 +160,39 @@ impl<const CAP: usize, const TILES: usize> Bins<CAP, TILES> {
         self.plan[..tiles].copy_from_slice(&self.count[..tiles]);
     }
 
-    /// How many planned tiles from `from` (of `len`) fit the bins together.
+    /// How many planned tiles from `from` (of `len`) fit the bins together
+    /// as flat lists ([`Self::reset_flat`]).
     pub(crate) fn plan_fit(&self, from: usize, len: usize) -> usize {
         let mut sum = 0usize;
         self.plan[from..from + len]
             .iter()
             .take_while(|&&c| {
                 sum += c as usize;
-                sum <= CAP
+                sum <= 2 * CAP
             })
             .count()
     }
 
     /// Tile `t`'s keys, in the order they were pushed.
     pub(crate) fn keys(&self, t: usize) -> impl Iterator<Item = u32> + '_ {
-        let mut at = self.head[t];
+        let flat = self.flat;
+        let (mut at, end) = match (flat, t.checked_sub(1)) {
+            (false, _) => (self.head[t], NONE),
+            (true, None) => (0, self.head[t]),
+            (true, Some(p)) => (self.tail[p], self.head[t]),
+        };
         core::iter::from_fn(move || {
+            if flat {
+                let i = at as usize;
+                if at >= end {
+                    return None;
+                }
+                at += 1;
+                return match i.checked_sub(CAP) {
+                    None => self.key.get(i).copied(),
+                    Some(j) => self.next.get(j).copied(),
+                };
+            }
             let i = *self.key.get(at as usize)?;
             at = self.next[at as usize];
             Some(i)

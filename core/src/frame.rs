@@ -63,6 +63,34 @@ pub trait CommandSource {
     fn textures(&self) -> &[crate::texture::Texture<'_>] {
         &[]
     }
+    /// What binning reads: calls `f(key, bounds)` with each command's key
+    /// and the screen pixels it can touch, validating as
+    /// [`Self::each_keyed`] does. `bounds` is [`Command::bounds`], or
+    /// [`Command::coverage_bounds`] for every triangle when `cells` (coverage
+    /// antialiasing) and for an edge-flagged one when `area` (area
+    /// sampling). The default decodes each command; a source that can find
+    /// bounds cheaper overrides it — an [encoded](crate::wire::Encoded)
+    /// mesh reads only its vertices' positions.
+    fn each_bounds(
+        &self,
+        cells: bool,
+        area: bool,
+        mut f: impl FnMut(u32, Option<Rect>),
+    ) -> Result<(), Error> {
+        self.each_keyed(|k, c| f(k, bin_bounds(c, cells, area)))
+    }
+}
+
+/// The pixels `cmd` can touch in tiles with coverage antialiasing
+/// (`cells`) or area sampling (`area`), or neither
+/// ([`CommandSource::each_bounds`]).
+#[inline(always)]
+pub(crate) fn bin_bounds(cmd: &Command, cells: bool, area: bool) -> Option<Rect> {
+    if cells || area && cmd.edge_flagged() {
+        cmd.coverage_bounds()
+    } else {
+        cmd.bounds()
+    }
 }
 
 impl CommandSource for [Command] {
@@ -293,13 +321,7 @@ impl Frame {
         let mut stats = FrameStats::default();
         let aa = <C::Aa as AaMode>::SAMPLES > 0;
         let area = <C::Aa as AaMode>::AREA;
-        let bounds = |cmd: &Command| {
-            if aa || area && cmd.edge_flagged() {
-                cmd.coverage_bounds()
-            } else {
-                cmd.bounds()
-            }
-        };
+        let bounds = |cmd: &Command| bin_bounds(cmd, aa, area);
         let enabled = Bins::<CAP, TB>::enabled();
         if !enabled {
             cmds.validate()?;
@@ -318,10 +340,13 @@ impl Frame {
             let t1 = t0 + band;
             let mut binned = false;
             if enabled && band > 0 {
-                bins.reset(band as usize);
+                match planned {
+                    Some((base, _)) => bins.reset_flat((t0 - base) as usize, band as usize),
+                    None => bins.reset(band as usize),
+                }
                 let mut full = false;
-                cmds.each_keyed(|key, cmd| {
-                    let Some((x0, x1, y0, y1)) = bounds(cmd).and_then(|b| g.span(&b)) else {
+                cmds.each_bounds(aa, area, |key, b| {
+                    let Some((x0, x1, y0, y1)) = b.and_then(|b| g.span(&b)) else {
                         return;
                     };
                     for ty in y0..=y1 {

@@ -279,7 +279,13 @@ impl QuadVertex {
 /// and the divisions by 16 are arithmetic shifts (floor): it runs for every
 /// command in every tile, so it must be cheap on a Cortex-M0.
 pub(crate) fn pixel_bounds(v: &[Vertex; 3]) -> Option<Rect> {
-    let [a, b, c] = v.map(|v| (v.x.to_bits(), v.y.to_bits()));
+    pixel_bounds_of(v.map(|v| (v.x.to_bits(), v.y.to_bits())))
+}
+
+/// [`pixel_bounds`] from the vertices' positions alone (sub-pixels): what
+/// binning reads of an encoded mesh's triangles.
+#[inline(always)]
+pub(crate) fn pixel_bounds_of([a, b, c]: [(i32, i32); 3]) -> Option<Rect> {
     let half = (SUBPIXEL / 2) as i32;
     // Pixel px has its centre at 16 px + 8: px in [ceil((min-8)/16), floor((max-8)/16)].
     let lo = |m: i32| (m - half + (SUBPIXEL as i32 - 1)) >> SUBPIXEL_BITS;
@@ -292,11 +298,18 @@ pub(crate) fn pixel_bounds(v: &[Vertex; 3]) -> Option<Rect> {
 /// The pixels whose cells `[16 p, 16 p + 16)` the triangle's box meets:
 /// every pixel any sample of which can be inside (coverage antialiasing).
 pub(crate) fn cell_bounds(v: &[Vertex; 3]) -> Rect {
-    let cells = |f: fn(&Vertex) -> i32| {
-        let lo = v.iter().map(f).min().unwrap_or(0) >> SUBPIXEL_BITS;
-        let hi = v.iter().map(f).max().unwrap_or(0) >> SUBPIXEL_BITS;
+    cell_bounds_of(v.map(|v| (v.x.to_bits(), v.y.to_bits())))
+}
+
+/// [`cell_bounds`] from the vertices' positions alone (sub-pixels).
+#[inline(always)]
+pub(crate) fn cell_bounds_of([a, b, c]: [(i32, i32); 3]) -> Rect {
+    let (x0, x1) = (a.0.min(b.0).min(c.0), a.0.max(b.0).max(c.0));
+    let (y0, y1) = (a.1.min(b.1).min(c.1), a.1.max(b.1).max(c.1));
+    let cells = |lo: i32, hi: i32| {
+        let (lo, hi) = (lo >> SUBPIXEL_BITS, hi >> SUBPIXEL_BITS);
         (lo, (hi - lo + 1) as u32)
     };
-    let ((x, w), (y, h)) = (cells(|v| v.x.to_bits()), cells(|v| v.y.to_bits()));
+    let ((x, w), (y, h)) = (cells(x0, x1), cells(y0, y1));
     Rect::new(x, y, w, h)
 }

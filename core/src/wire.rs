@@ -563,6 +563,13 @@ pub fn encode_mesh(
     Ok(w.pos)
 }
 
+/// What [`Encoded::walk`] meets: a mesh triangle (its record's cursor and
+/// the offset of its indices there), or any other command, decoded.
+enum Item<'c, 'a> {
+    Triangle(&'c MeshCursor<'a>, usize),
+    Command(&'c Command),
+}
+
 /// A mesh record being replayed.
 #[derive(Debug, Clone, Copy)]
 struct MeshCursor<'a> {
@@ -611,17 +618,7 @@ impl MeshCursor<'_> {
 
     #[inline(always)]
     fn triangle_of<const S: usize>(&self, at: usize) -> Result<Command, Error> {
-        let c: &[u8; 6] = self
-            .indices
-            .get(at..at + 6)
-            .and_then(|c| c.try_into().ok())
-            .ok_or(Error::Malformed)?;
-        let i = [[c[0], c[1]], [c[2], c[3]], [c[4], c[5]]].map(u16::from_le_bytes);
-        // One range check for the three vertices.
-        let top = i[0].max(i[1]).max(i[2]) as usize;
-        if (top + 1) * S > self.vertices.len() {
-            return Err(Error::Malformed);
-        }
+        let i = self.indices_of::<S>(at)?;
         let v = [
             self.vertex::<S>(i[0]),
             self.vertex::<S>(i[1]),
@@ -632,7 +629,62 @@ impl MeshCursor<'_> {
             state: self.state,
         })
     }
+
+    /// The vertex indices of the triangle at `at`, each checked to name a
+    /// whole vertex of `S` bytes (one range check for the three).
+    #[inline(always)]
+    fn indices_of<const S: usize>(&self, at: usize) -> Result<[u16; 3], Error> {
+        let c: &[u8; 6] = self
+            .indices
+            .get(at..at + 6)
+            .and_then(|c| c.try_into().ok())
+            .ok_or(Error::Malformed)?;
+        let i = [[c[0], c[1]], [c[2], c[3]], [c[4], c[5]]].map(u16::from_le_bytes);
+        let top = i[0].max(i[1]).max(i[2]) as usize;
+        if (top + 1) * S > self.vertices.len() {
+            return Err(Error::Malformed);
+        }
+        Ok(i)
+    }
+
+    /// What binning needs of the triangle at `at`: its pixels
+    /// ([`Command::bounds`]), or its cells with `cells`
+    /// ([`Command::coverage_bounds`]; a mesh vertex has no edge flag), from
+    /// the vertices' positions alone (the first four bytes of each).
+    #[inline(always)]
+    fn bounds(&self, at: usize, cells: bool) -> Result<Option<Rect>, Error> {
+        let p = |i: [u16; 3], s: usize| {
+            i.map(|i| {
+                let at = i as usize * s;
+                match self.vertices.get(at..at + 4) {
+                    Some(&[x0, x1, y0, y1]) => (
+                        i16::from_le_bytes([x0, x1]) as i32,
+                        i16::from_le_bytes([y0, y1]) as i32,
+                    ),
+                    _ => (0, 0),
+                }
+            })
+        };
+        let p = if self.alpha {
+            p(self.indices_of::<{ MESH_VERTEX + 1 }>(at)?, MESH_VERTEX + 1)
+        } else {
+            p(self.indices_of::<MESH_VERTEX>(at)?, MESH_VERTEX)
+        };
+        Ok(if cells {
+            Some(crate::geom::cell_bounds_of(p))
+        } else {
+            crate::geom::pixel_bounds_of(p)
+        })
+    }
 }
+
+/// A mesh vertex's coordinates are `i16` sub-pixels: always inside the
+/// documented domain ([`Vertex::validate`]), so a mesh triangle needs no
+/// validation beyond its indices.
+const _: () = assert!(
+    (i16::MAX as i64) < crate::numeric::COORD_LIMIT as i64 * crate::numeric::SUBPIXEL
+        && (i16::MIN as i64) >= -(crate::numeric::COORD_LIMIT as i64 * crate::numeric::SUBPIXEL)
+);
 
 /// Reads a mesh record's header; returns the cursor and the record length
 /// (the index list is its last `6 nt` bytes).
@@ -679,6 +731,35 @@ fn is_mesh(tag: u8) -> bool {
 }
 
 impl<'a> Encoded<'a> {
+    /// Calls `f(key, item)` with every command, in order: a plain loop, not
+    /// `keyed()` (the iterator's `Result`s copied every 58-byte command
+    /// three times: 2.5 M instructions a teapot frame on the Cortex-M4,
+    /// measured), each command built once, in place, and lent to `f`, and a
+    /// mesh triangle left to `f` to decode as far as it needs. The first
+    /// error, the walk's or `f`'s, ends it.
+    #[inline(always)]
+    fn walk(&self, mut f: impl FnMut(u32, Item<'_, 'a>) -> Result<(), Error>) -> Result<(), Error> {
+        let all = self.0;
+        let mut pos = 0usize;
+        while let Some(rest) = all.get(pos..).filter(|r| !r.is_empty()) {
+            if is_mesh(rest[0]) {
+                let (m, n) = mesh_record(rest)?;
+                let base = pos + n - m.indices.len();
+                let mut at = 0;
+                while at + 6 <= m.indices.len() {
+                    f((base + at) as u32, Item::Triangle(&m, at))?;
+                    at += 6;
+                }
+                pos += n;
+            } else {
+                let (cmd, n) = decode(rest)?;
+                f(pos as u32, Item::Command(&cmd))?;
+                pos += n;
+            }
+        }
+        Ok(())
+    }
+
     /// The commands, decoded and validated one by one (a mesh record yields
     /// its triangles). Decoding stops after the first error.
     pub fn iter(&self) -> impl Iterator<Item = Result<Command, Error>> + 'a {
@@ -875,31 +956,37 @@ impl SceneHeader {
 /// commands, straight from flash.
 impl crate::frame::CommandSource for Encoded<'_> {
     fn each_keyed(&self, mut f: impl FnMut(u32, &Command)) -> Result<(), Error> {
-        // A plain loop, not `keyed()`: each command is built once, in
-        // place, and lent to `f` (the iterator's `Result`s copied every
-        // 58-byte command three times: 2.5 M instructions a teapot frame on
-        // the Cortex-M4, measured).
-        let all = self.0;
-        let mut pos = 0usize;
-        while let Some(rest) = all.get(pos..).filter(|r| !r.is_empty()) {
-            if is_mesh(rest[0]) {
-                let (m, n) = mesh_record(rest)?;
-                let base = pos + n - m.indices.len();
-                let mut at = 0;
-                while at + 6 <= m.indices.len() {
+        self.walk(|key, item| {
+            match item {
+                Item::Triangle(m, at) => {
+                    // Valid once its indices are (the assertion on
+                    // `MeshCursor::bounds`).
                     let cmd = m.triangle(at)?;
-                    cmd.validate()?;
-                    f((base + at) as u32, &cmd);
-                    at += 6;
+                    debug_assert!(cmd.validate().is_ok());
+                    f(key, &cmd)
                 }
-                pos += n;
-            } else {
-                let (cmd, n) = decode(rest)?;
-                f(pos as u32, &cmd);
-                pos += n;
+                Item::Command(cmd) => f(key, cmd),
             }
-        }
-        Ok(())
+            Ok(())
+        })
+    }
+
+    fn each_bounds(
+        &self,
+        cells: bool,
+        area: bool,
+        mut f: impl FnMut(u32, Option<Rect>),
+    ) -> Result<(), Error> {
+        // A mesh triangle's colours and depths are not decoded (the
+        // micro:bit bins its demo frame in several passes).
+        self.walk(|key, item| {
+            let b = match item {
+                Item::Triangle(m, at) => m.bounds(at, cells)?,
+                Item::Command(cmd) => crate::frame::bin_bounds(cmd, cells, area),
+            };
+            f(key, b);
+            Ok(())
+        })
     }
 
     fn replay(&self, keys: impl Iterator<Item = u32>, mut f: impl FnMut(&Command)) {

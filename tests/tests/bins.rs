@@ -51,10 +51,17 @@ fn the_demo_from_flash_is_the_same_through_any_bins() {
     assert_eq!(raw, plain);
     assert_eq!((st.bin_passes, st.unbinned_tiles), (1, 0));
     assert_eq!(st.replayed, none.replayed, "the same (tile, command) pairs");
-    // Too small for the frame: bands.
+    // Too small for the frame: bands, each laid out flat from the
+    // overflowing pass's counts, so a band holds up to twice the entries.
     let (raw, st) = frame_raw::<256, DemoTileConfig, _, 2048, 32>(&frame, &cmds);
     assert_eq!(raw, plain);
     assert!(st.bin_passes > 2 && st.unbinned_tiles == 0, "{st:?}");
+    assert!((2049..=4096).contains(&st.bin_peak), "{st:?}");
+    let pairs = st.replayed as usize;
+    assert!(
+        st.bin_passes as usize <= 1 + pairs.div_ceil(2048),
+        "{pairs} pairs in {st:?}"
+    );
     // Too small for some tiles alone: those replay the whole list.
     let (raw, st) = frame_raw::<256, DemoTileConfig, _, 64, 4>(&frame, &cmds);
     assert_eq!(raw, plain);
@@ -83,5 +90,32 @@ proptest! {
         prop_assert_eq!(&a, &plain);
         prop_assert_eq!(&b, &plain);
         prop_assert_eq!(&c, &plain);
+    }
+}
+
+/// What binning reads of an encoded list (a mesh's triangles from their
+/// positions alone) is each command's bounds, in every antialiasing mode.
+#[test]
+fn encoded_bounds_are_the_commands_bounds() {
+    for name in ["demo.toml", "area.toml", "ruf.toml"] {
+        let bytes = Scene::load(scene(name)).unwrap().encode().unwrap();
+        let (_, cmds) = SceneHeader::parse(&bytes).unwrap();
+        for (cells, area) in [(false, false), (true, false), (false, true)] {
+            let mut want = vec![];
+            cmds.each_keyed(|k, c| {
+                let b = if cells || area && c.edge_flagged() {
+                    c.coverage_bounds()
+                } else {
+                    c.bounds()
+                };
+                want.push((k, b));
+            })
+            .unwrap();
+            let mut got = vec![];
+            cmds.each_bounds(cells, area, |k, b| got.push((k, b)))
+                .unwrap();
+            assert!(want.len() > 10, "{name}");
+            assert_eq!(got, want, "{name} cells {cells} area {area}");
+        }
     }
 }
