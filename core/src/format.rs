@@ -10,7 +10,7 @@
 //! single luma channel, `(77 R + 150 G + 29 B) / 256` (the same weights as
 //! `embedded-graphics`), computed per vertex: one lane instead of three.
 
-use crate::numeric::{div_round, COLOR_FRAC};
+use crate::numeric::{div255, div_round, COLOR_FRAC};
 use embedded_graphics_core::pixelcolor::{
     raw::RawU16, BinaryColor, Gray8, GrayColor, PixelColor, Rgb565, Rgb888, RgbColor,
 };
@@ -141,7 +141,7 @@ const _: () = assert!(
 #[inline(always)]
 fn scale(v: i64, max: i32) -> i32 {
     match u32::try_from(v) {
-        Ok(u) if u < 1 << 24 => ((u * max as u32 + 127) / 255) as i32,
+        Ok(u) if u < 1 << 24 => div255(u * max as u32 + 127) as i32,
         _ => div_round(v * max as i64, 255) as i32,
     }
 }

@@ -209,18 +209,113 @@ pub(crate) fn div_round_pair(a: i64, b: i64, d: i64) -> (i64, i64) {
     }
 }
 
-/// The high 64 bits of `a b`, from four 32x32-bit products: the same code
-/// as a `u128` product on the Cortex-M4 (four `umull`s; measured equal), and
-/// four 64-bit multiply calls on the Cortex-M0, where `u128` becomes a
-/// general 128-bit multiply (with the 32-bit remainder check below: the M0
-/// demo frame's setup 43.8 M -> 42.8 M instructions, measured).
+/// Whether the core multiplies two 32-bit integers into 64 bits in one
+/// instruction (`umull`/`smull`: ARMv7-M and up, every host); ARMv6-M (the
+/// Cortex-M0) has only the low half ([`wide_mul`]).
+pub(crate) const LONG_MUL: bool = !cfg!(target_arch = "arm") || HW_DIV32;
+
+/// `a b`, all 64 bits: one `umull` where the core has it ([`LONG_MUL`]);
+/// on the Cortex-M0 four 16x16-bit products inline, instead of the
+/// general 64x64-bit library multiply (`__aeabi_lmul`, ~40 instructions a
+/// call, 55 calls per triangle and tile in the setup: measured).
+#[inline(always)]
+pub(crate) fn wide_mul(a: u32, b: u32) -> u64 {
+    wide_mul_by::<LONG_MUL>(a, b)
+}
+
+/// [`wide_mul`] by the long multiply (`LONG`) or by 16-bit pieces (the
+/// tests run both routes on the host).
+#[inline(always)]
+fn wide_mul_by<const LONG: bool>(a: u32, b: u32) -> u64 {
+    if LONG {
+        return a as u64 * b as u64;
+    }
+    let (a0, a1, b0, b1) = (a & 0xffff, a >> 16, b & 0xffff, b >> 16);
+    // Each partial product is below 2^32; `mid` below 2^33 (its carry).
+    let (mid, carry) = (a1 * b0).overflowing_add(a0 * b1);
+    let (lo, c) = (a0 * b0).overflowing_add(mid << 16);
+    let hi = a1 * b1 + (mid >> 16) + ((carry as u32) << 16) + c as u32;
+    (hi as u64) << 32 | lo as u64
+}
+
+/// `a b` for signed 32-bit factors, exactly ([`wide_mul`]).
+#[inline(always)]
+pub(crate) fn wide_mul_i(a: i32, b: i32) -> i64 {
+    wide_mul_i_by::<LONG_MUL>(a, b)
+}
+
+#[inline(always)]
+fn wide_mul_i_by<const LONG: bool>(a: i32, b: i32) -> i64 {
+    if LONG {
+        return a as i64 * b as i64;
+    }
+    let p = wide_mul_by::<false>(a.unsigned_abs(), b.unsigned_abs()) as i64;
+    if (a ^ b) < 0 {
+        p.wrapping_neg()
+    } else {
+        p
+    }
+}
+
+/// `g o` modulo 2^64 (`g.wrapping_mul(o)`) for a 32-bit `o`: one
+/// [`wide_mul`] and one 32-bit product, so no library multiply on the
+/// Cortex-M0 (a plane's anchor offset, twice per plane and tile).
+#[inline(always)]
+pub(crate) fn wrapping_mul_i32(g: i64, o: i32) -> i64 {
+    wrapping_mul_i32_by::<LONG_MUL>(g, o)
+}
+
+#[inline(always)]
+fn wrapping_mul_i32_by<const LONG: bool>(g: i64, o: i32) -> i64 {
+    if LONG {
+        return g.wrapping_mul(o as i64);
+    }
+    // g |o| = lo(g) |o| + hi(g) |o| 2^32, modulo 2^64.
+    let m = o.unsigned_abs();
+    let hi = ((g >> 32) as u32).wrapping_mul(m);
+    let p = wide_mul_by::<false>(g as u32, m).wrapping_add((hi as u64) << 32) as i64;
+    if o < 0 {
+        p.wrapping_neg()
+    } else {
+        p
+    }
+}
+
+/// `floor(x / 255)` for any `u32`, without a division: the colour scale's
+/// `/ 255` is a library call of ~90 instructions on the Cortex-M0 (nine
+/// per triangle and tile, measured); hosts and ARMv7-M keep the compiler's
+/// multiply by the reciprocal. With `q0 = floor(x / 256)`,
+/// `q = q0 + floor(q0 / 2^8) + floor(q0 / 2^16) + floor(q0 / 2^24)`
+/// stays below the series `x / 255 = Σ x / 256^k` and loses less than 5 to
+/// its floors and tail, so `r = x - 255 q < 1275`, and `floor(r / 255) =
+/// (r + 1) 257 / 2^16` for every `r < 2^16` (both checked in the tests).
+#[inline(always)]
+pub(crate) const fn div255(x: u32) -> u32 {
+    div255_by::<LONG_MUL>(x)
+}
+
+#[inline(always)]
+const fn div255_by<const LONG: bool>(x: u32) -> u32 {
+    if LONG {
+        return x / 255;
+    }
+    let q0 = x >> 8;
+    let q = q0 + (q0 >> 8) + (q0 >> 16) + (q0 >> 24);
+    let r = x - 255 * q;
+    q + (((r + 1) * 257) >> 16)
+}
+
+/// The high 64 bits of `a b`, from four 32x32-bit products ([`wide_mul`]):
+/// the same code as a `u128` product on the Cortex-M4 (four `umull`s;
+/// measured equal); on the Cortex-M0, where `u128` becomes a general
+/// 128-bit multiply, four inline 16-bit-piece products.
 #[inline(always)]
 fn mul_high(a: u64, b: u64) -> u64 {
-    let (a0, a1) = (a & 0xffff_ffff, a >> 32);
-    let (b0, b1) = (b & 0xffff_ffff, b >> 32);
-    let (p01, p10) = (a0 * b1, a1 * b0);
-    let mid = ((a0 * b0) >> 32) + (p01 & 0xffff_ffff) + (p10 & 0xffff_ffff);
-    a1 * b1 + (p01 >> 32) + (p10 >> 32) + (mid >> 32)
+    let (a0, a1) = (a as u32, (a >> 32) as u32);
+    let (b0, b1) = (b as u32, (b >> 32) as u32);
+    let (p01, p10) = (wide_mul(a0, b1), wide_mul(a1, b0));
+    let mid = (wide_mul(a0, b0) >> 32) + (p01 & 0xffff_ffff) + (p10 & 0xffff_ffff);
+    wide_mul(a1, b1) + (p01 >> 32) + (p10 >> 32) + (mid >> 32)
 }
 
 /// Many divisions by one positive divisor `d` (a triangle's doubled area):
@@ -343,6 +438,64 @@ mod tests {
             div_floor_u24(u64::MAX, (1 << 24) - 1),
             u64::MAX / ((1 << 24) - 1)
         );
+    }
+
+    #[test]
+    fn the_m0_routes_are_exact() {
+        let mut x = 0x2545_f491_4f6c_dd1du64;
+        let edges = [
+            0,
+            1,
+            2,
+            0xffff,
+            0x1_0000,
+            0x7fff_ffff,
+            0x8000_0000,
+            u32::MAX,
+        ];
+        for &a in &edges {
+            for &b in &edges {
+                assert_eq!(wide_mul_by::<false>(a, b), a as u64 * b as u64);
+                let (a, b) = (a as i32, b as i32);
+                assert_eq!(wide_mul_i_by::<false>(a, b), a as i64 * b as i64);
+            }
+        }
+        for _ in 0..1_000_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let (a, b) = (x as u32, (x >> 32) as u32);
+            assert_eq!(wide_mul_by::<false>(a, b), a as u64 * b as u64);
+            let (a, b) = (a as i32, b as i32);
+            assert_eq!(wide_mul_i_by::<false>(a, b), a as i64 * b as i64);
+        }
+        for _ in 0..1_000_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let o = (x.rotate_left(17) as i32) >> (x % 31);
+            let g = x as i64 >> (x >> 58);
+            assert_eq!(wrapping_mul_i32_by::<false>(g, o), g.wrapping_mul(o as i64));
+        }
+        for &g in &[0, 1, -1, i64::MAX, i64::MIN, 1 << 32, -(1 << 32)] {
+            for &o in &[0, 1, -1, i32::MAX, i32::MIN] {
+                assert_eq!(wrapping_mul_i32_by::<false>(g, o), g.wrapping_mul(o as i64));
+            }
+        }
+        // The remainder's bound and the small division, exhaustively.
+        for r in 0..1u32 << 16 {
+            assert_eq!(((r + 1) * 257) >> 16, r / 255, "{r}");
+        }
+        let tail = u32::MAX - 100_000..=u32::MAX;
+        for x in (0..1u32 << 24)
+            .chain((0..=u32::MAX).step_by(251))
+            .chain(tail)
+        {
+            let q0 = x >> 8;
+            let q = q0 + (q0 >> 8) + (q0 >> 16) + (q0 >> 24);
+            assert!(x - 255 * q < 1275, "{x}");
+            assert_eq!(div255_by::<false>(x), x / 255, "{x}");
+        }
     }
 
     #[test]

@@ -30,7 +30,10 @@
 use crate::format::{Lanes, PixelFormat};
 use crate::geom::Rect;
 use crate::geom::{pixel_bounds, QuadVertex, Vertex};
-use crate::numeric::{pairs, Divisor, COLOR_FRAC, SUBPIXEL, SUBPIXEL_BITS, W_FRAC, Z_FRAC};
+use crate::numeric::{
+    pairs, wide_mul_i, wrapping_mul_i32, Divisor, COLOR_FRAC, SUBPIXEL, SUBPIXEL_BITS, W_FRAC,
+    Z_FRAC,
+};
 
 /// One edge as a function of pixel indices: `E(px, py) = a px + b0 + step py`.
 #[derive(Debug, Clone, Copy)]
@@ -306,7 +309,11 @@ impl<L: Lanes, T: EdgeInt> TriangleSetup<L, T> {
         let (a1, a2) = (e[1].a.to_i64(), e[2].a.to_i64());
         let (s1, s2) = (e[1].step.to_i64(), e[2].step.to_i64());
         let area = Divisor::new(area2);
-        let grad = |d0: i32, d1: i32, k1: i64, k2: i64| area.round(d0 as i64 * k1 + d1 as i64 * k2);
+        // `|k| < 2^23` (validated coordinates): 32x32-bit products.
+        let grad = |d0: i32, d1: i32, k1: i64, k2: i64| {
+            debug_assert!(k1 == k1 as i32 as i64 && k2 == k2 as i32 as i64);
+            area.round(wide_mul_i(d0, k1 as i32) + wide_mul_i(d1, k2 as i32))
+        };
         // The anchor's value from vertex 0's, `(ox, oy)` sub-pixels away,
         // through the rounded steps: wrapping `i64` products and an
         // arithmetic shift give it exactly modulo 2^32, which is all the
@@ -319,7 +326,8 @@ impl<L: Lanes, T: EdgeInt> TriangleSetup<L, T> {
                 return (a0, gx as i32, 0);
             }
             let gy = grad(d0, d1, s1, s2);
-            let off = gx.wrapping_mul(ox).wrapping_add(gy.wrapping_mul(oy));
+            // `|ox|, |oy| < 2^15`: within the triangle's box.
+            let off = wrapping_mul_i32(gx, ox as i32).wrapping_add(wrapping_mul_i32(gy, oy as i32));
             let off = off.wrapping_add(SUBPIXEL / 2) >> SUBPIXEL_BITS;
             (a0.wrapping_add(off as i32), gx as i32, gy as i32)
         };
