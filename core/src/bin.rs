@@ -217,7 +217,61 @@ pub(crate) struct Grid {
     pub rows: u32,
 }
 
+/// A divisor that is a shift when it is a power of two (nearly every tile
+/// size): a division is a library call of ~100 instructions on the
+/// Cortex-M0, and so is finding the shift (no `clz` there), four per command
+/// per binning pass (measured) — so the shift is found once per pass.
+#[derive(Debug, Clone, Copy)]
+struct By {
+    d: u32,
+    /// `log2 d`, or 32 when `d` is not a power of two.
+    shift: u32,
+}
+
+impl By {
+    fn new(d: u32) -> Self {
+        let shift = if d.is_power_of_two() {
+            d.trailing_zeros()
+        } else {
+            32
+        };
+        By { d, shift }
+    }
+
+    #[inline(always)]
+    fn div(self, v: u32) -> u32 {
+        if self.shift < 32 {
+            v >> self.shift
+        } else {
+            v / self.d
+        }
+    }
+}
+
 impl Grid {
+    /// [`GridSpans::span`] for many rectangles: the tile sizes' shifts
+    /// found once ([`By`]).
+    pub fn spans(&self) -> GridSpans {
+        GridSpans {
+            w: self.w,
+            h: self.h,
+            tw: By::new(self.tw),
+            th: By::new(self.th),
+        }
+    }
+}
+
+/// Which tiles of a [`Grid`] a rectangle touches, the divisions prepared
+/// ([`Grid::spans`]).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct GridSpans {
+    w: u32,
+    h: u32,
+    tw: By,
+    th: By,
+}
+
+impl GridSpans {
     /// The tiles `r` touches, as inclusive column and row ranges; `None`
     /// when it is off screen.
     #[inline]
@@ -229,21 +283,11 @@ impl Grid {
         }
         let lo = |v: i32| v.max(0) as u32;
         let hi = |v: i64, max: u32| (v.min(max as i64) - 1) as u32;
-        // Power-of-two tiles (nearly every configuration) shift instead of
-        // dividing: a division is a library call of ~100 instructions on
-        // the Cortex-M0, four per command per binning pass (measured).
-        let div = |v: u32, d: u32| {
-            if d.is_power_of_two() {
-                v >> d.trailing_zeros()
-            } else {
-                v / d
-            }
-        };
         Some((
-            div(lo(r.x), self.tw),
-            div(hi(x1, w), self.tw),
-            div(lo(r.y), self.th),
-            div(hi(y1, h), self.th),
+            self.tw.div(lo(r.x)),
+            self.tw.div(hi(x1, w)),
+            self.th.div(lo(r.y)),
+            self.th.div(hi(y1, h)),
         ))
     }
 }

@@ -345,8 +345,9 @@ impl Frame {
                     None => bins.reset(band as usize),
                 }
                 let mut full = false;
+                let spans = g.spans();
                 cmds.each_bounds(aa, area, |key, b| {
-                    let Some((x0, x1, y0, y1)) = b.and_then(|b| g.span(&b)) else {
+                    let Some((x0, x1, y0, y1)) = b.and_then(|b| spans.span(&b)) else {
                         return;
                     };
                     for ty in y0..=y1 {
