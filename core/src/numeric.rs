@@ -228,8 +228,18 @@ pub(crate) fn wide_mul(a: u32, b: u32) -> u64 {
 #[inline(always)]
 fn wide_mul_by<const LONG: bool>(a: u32, b: u32) -> u64 {
     if LONG {
-        return a as u64 * b as u64;
+        a as u64 * b as u64
+    } else {
+        wide_mul_pieces(a, b)
     }
+}
+
+/// [`wide_mul`] from four 16x16-bit products. Out of line on the Cortex-M0:
+/// inlined at every product of the setup it overflowed the micro:bit's
+/// 256 KB of flash (the workloads' build); a call still costs far less than
+/// `__aeabi_lmul`'s.
+#[cfg_attr(all(target_arch = "arm", not(target_has_atomic = "32")), inline(never))]
+fn wide_mul_pieces(a: u32, b: u32) -> u64 {
     let (a0, a1, b0, b1) = (a & 0xffff, a >> 16, b & 0xffff, b >> 16);
     // Each partial product is below 2^32; `mid` below 2^33 (its carry).
     let (mid, carry) = (a1 * b0).overflowing_add(a0 * b1);
