@@ -495,6 +495,8 @@ fn firmware_output_is_bit_identical_to_the_host() {
         let full_volume = has_volume_code(&elf);
         let full_occlusion = has_occlusion_code(&elf);
         let min_elf = build(board, &scenes, Some("ssd1306"));
+        // Read now: the micro:bit's later builds replace this ELF.
+        let minimal = sizes(&min_elf);
         let min_volume = has_volume_code(&min_elf);
         let min_occlusion = has_occlusion_code(&min_elf);
         let min_run = parse(&run(board, &min_elf));
@@ -675,7 +677,7 @@ fn firmware_output_is_bit_identical_to_the_host() {
         }
         reports.push(BoardResult {
             full,
-            minimal: sizes(&min_elf),
+            minimal,
             minimal_stack: min_run.stack_used,
             report: r,
         });
