@@ -215,9 +215,10 @@ pub(crate) fn div_round_pair(a: i64, b: i64, d: i64) -> (i64, i64) {
 pub(crate) const LONG_MUL: bool = !cfg!(target_arch = "arm") || HW_DIV32;
 
 /// `a b`, all 64 bits: one `umull` where the core has it ([`LONG_MUL`]);
-/// on the Cortex-M0 four 16x16-bit products inline, instead of the
-/// general 64x64-bit library multiply (`__aeabi_lmul`, ~40 instructions a
-/// call, 55 calls per triangle and tile in the setup: measured).
+/// on the Cortex-M0 four 16x16-bit products ([`wide_mul_pieces`]) instead
+/// of the general 64x64-bit library multiply (`__aeabi_lmul`, ~40
+/// instructions a call, 55 calls per triangle and tile in the setup:
+/// measured).
 #[inline(always)]
 pub(crate) fn wide_mul(a: u32, b: u32) -> u64 {
     wide_mul_by::<LONG_MUL>(a, b)
@@ -260,7 +261,14 @@ fn wide_mul_i_by<const LONG: bool>(a: i32, b: i32) -> i64 {
         return a as i64 * b as i64;
     }
     let p = wide_mul_by::<false>(a.unsigned_abs(), b.unsigned_abs()) as i64;
-    if (a ^ b) < 0 {
+    negated_if(p, (a ^ b) < 0)
+}
+
+/// `-p` (modulo 2^64) when `negative`, else `p`: the sign of a product
+/// built from magnitudes.
+#[inline(always)]
+fn negated_if(p: i64, negative: bool) -> i64 {
+    if negative {
         p.wrapping_neg()
     } else {
         p
@@ -284,11 +292,7 @@ fn wrapping_mul_i32_by<const LONG: bool>(g: i64, o: i32) -> i64 {
     let m = o.unsigned_abs();
     let hi = ((g >> 32) as u32).wrapping_mul(m);
     let p = wide_mul_by::<false>(g as u32, m).wrapping_add((hi as u64) << 32) as i64;
-    if o < 0 {
-        p.wrapping_neg()
-    } else {
-        p
-    }
+    negated_if(p, o < 0)
 }
 
 /// `floor(x / 255)` for any `u32`, without a division: the colour scale's
