@@ -122,6 +122,15 @@ impl<const CAP: usize, const TILES: usize> Bins<CAP, TILES> {
         }
     }
 
+    /// The key in slot `i` of the flat lists ([`Self::slot`]).
+    #[inline(always)]
+    fn slot_key(&self, i: usize) -> Option<u32> {
+        match i.checked_sub(CAP) {
+            None => self.key.get(i).copied(),
+            Some(j) => self.next.get(j).copied(),
+        }
+    }
+
     /// Entries used.
     pub(crate) fn len(&self) -> usize {
         self.len
@@ -183,15 +192,11 @@ impl<const CAP: usize, const TILES: usize> Bins<CAP, TILES> {
         };
         core::iter::from_fn(move || {
             if flat {
-                let i = at as usize;
                 if at >= end {
                     return None;
                 }
                 at += 1;
-                return match i.checked_sub(CAP) {
-                    None => self.key.get(i).copied(),
-                    Some(j) => self.next.get(j).copied(),
-                };
+                return self.slot_key(at as usize - 1);
             }
             let i = *self.key.get(at as usize)?;
             at = self.next[at as usize];

@@ -71,6 +71,15 @@ pub trait CommandSource {
     /// sampling). The default decodes each command; a source that can find
     /// bounds cheaper overrides it — an [encoded](crate::wire::Encoded)
     /// mesh reads only its vertices' positions.
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// let list = [Command::fill(Rect::new(2, 3, 4, 5), Rgb::new(1, 2, 3))];
+    /// let mut seen = vec![];
+    /// list[..].each_bounds(false, false, |key, b| seen.push((key, b)))?;
+    /// assert_eq!(seen, [(0, Some(Rect::new(2, 3, 4, 5)))]);
+    /// # Ok::<(), Error>(())
+    /// ```
     fn each_bounds(
         &self,
         cells: bool,
