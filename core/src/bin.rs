@@ -17,7 +17,9 @@
 //! band does not link its entries: it lays each tile's keys out flat, where
 //! the counts put them (a counting sort), in the link words too — `2 CAP`
 //! entries a band, half as many passes (the micro:bit's demo frame: 12
-//! passes before, measured in `reports/targets.md` now). Binning reads
+//! passes before, 7 after). When every key is below 2^16 (a source of fewer
+//! than 65,536 commands: keys are ordinals) two keys share a word: `4 CAP`
+//! entries a band (the same frame: 4 passes, `reports/targets.md`). Binning reads
 //! only what it needs of each command ([`CommandSource::each_bounds`](crate::frame::CommandSource::each_bounds)):
 //! an encoded mesh's triangles, their vertices' positions.
 //!
@@ -54,9 +56,14 @@ pub struct Bins<const CAP: usize, const TILES: usize> {
     next: [u32; CAP],
     len: usize,
     /// Whether the lists are flat ([`Self::reset_flat`]): tile `t`'s keys
-    /// fill slots `tail[t - 1]..head[t]` of the `2 CAP` slots of `key` and
+    /// fill slots `tail[t - 1]..head[t]` of the `2 CAP` words of `key` and
     /// `next` together (`head` is its write cursor, `tail` its end).
     flat: bool,
+    /// The last (largest) key pushed since the last [`Self::reset`].
+    top: u32,
+    /// Whether flat lists hold 16-bit keys, two a word (`4 CAP` slots):
+    /// the planning pass met no key of 2^16 or more.
+    narrow: bool,
 }
 
 impl<const CAP: usize, const TILES: usize> Default for Bins<CAP, TILES> {
@@ -80,6 +87,8 @@ impl<const CAP: usize, const TILES: usize> Bins<CAP, TILES> {
             next: [NONE; CAP],
             len: 0,
             flat: false,
+            top: 0,
+            narrow: false,
         }
     }
 
@@ -95,12 +104,15 @@ impl<const CAP: usize, const TILES: usize> Bins<CAP, TILES> {
         self.tail[..tiles].fill(NONE);
         self.len = 0;
         self.flat = false;
+        self.top = 0;
+        self.narrow = false;
     }
 
     /// Empties the lists of the first `tiles` tiles as flat lists sized by
     /// the plan from its tile `from` on ([`Self::keep_plan`]): a counting
-    /// sort, no link per entry, so a band holds `2 CAP` entries (its tiles
-    /// are chosen by [`Self::plan_fit`]).
+    /// sort, no link per entry, so a band holds `2 CAP` entries, `4 CAP`
+    /// when they are narrow ([`Self::keep_plan`]; its tiles are chosen by
+    /// [`Self::plan_fit`]).
     pub(crate) fn reset_flat(&mut self, from: usize, tiles: usize) {
         let mut end = 0;
         for t in 0..tiles {
@@ -113,22 +125,41 @@ impl<const CAP: usize, const TILES: usize> Bins<CAP, TILES> {
         self.flat = true;
     }
 
-    /// Slot `i` of the flat lists (`i < 2 CAP`).
+    /// Word `i` of the flat lists (`i < 2 CAP`).
     #[inline(always)]
-    fn slot(&mut self, i: usize) -> Option<&mut u32> {
+    fn word(&mut self, i: usize) -> Option<&mut u32> {
         match i.checked_sub(CAP) {
             None => self.key.get_mut(i),
             Some(j) => self.next.get_mut(j),
         }
     }
 
-    /// The key in slot `i` of the flat lists ([`Self::slot`]).
+    /// Stores `key` in slot `i` of the flat lists: word `i`, or with
+    /// narrow keys half `i % 2` of word `i / 2`.
+    #[inline(always)]
+    fn set_slot(&mut self, i: usize, key: u32) -> bool {
+        if !self.narrow {
+            return self.word(i).map(|w| *w = key).is_some();
+        }
+        let shift = 16 * (i as u32 & 1);
+        self.word(i / 2)
+            .map(|w| *w = *w & !(0xFFFF << shift) | key << shift)
+            .is_some()
+    }
+
+    /// The key in slot `i` of the flat lists ([`Self::set_slot`]).
     #[inline(always)]
     fn slot_key(&self, i: usize) -> Option<u32> {
-        match i.checked_sub(CAP) {
-            None => self.key.get(i).copied(),
+        let w = if self.narrow { i / 2 } else { i };
+        let word = match w.checked_sub(CAP) {
+            None => self.key.get(w).copied(),
             Some(j) => self.next.get(j).copied(),
-        }
+        }?;
+        Some(if self.narrow {
+            word >> (16 * (i as u32 & 1)) & 0xFFFF
+        } else {
+            word
+        })
     }
 
     /// Entries used.
@@ -141,13 +172,16 @@ impl<const CAP: usize, const TILES: usize> Bins<CAP, TILES> {
     #[inline]
     pub(crate) fn push(&mut self, t: usize, key: u32) -> bool {
         self.count[t] += 1;
+        // Keys increase (`CommandSource::each_keyed`): the last is the
+        // largest.
+        self.top = key;
         if self.flat {
             let at = self.head[t];
             if at >= self.tail[t] {
                 return false;
             }
             self.head[t] = at + 1;
-            return self.slot(at as usize).map(|s| *s = key).is_some();
+            return self.set_slot(at as usize, key);
         }
         let n = self.len;
         if n >= CAP {
@@ -164,9 +198,11 @@ impl<const CAP: usize, const TILES: usize> Bins<CAP, TILES> {
         true
     }
 
-    /// Keeps the last pass's counts of its first `tiles` tiles as the plan.
+    /// Keeps the last pass's counts of its first `tiles` tiles as the plan;
+    /// its bands' keys are narrow when every key it met was below 2^16.
     pub(crate) fn keep_plan(&mut self, tiles: usize) {
         self.plan[..tiles].copy_from_slice(&self.count[..tiles]);
+        self.narrow = self.top <= 0xFFFF;
     }
 
     /// How many planned tiles from `from` (of `len`) fit the bins together
@@ -177,7 +213,7 @@ impl<const CAP: usize, const TILES: usize> Bins<CAP, TILES> {
             .iter()
             .take_while(|&&c| {
                 sum += c as usize;
-                sum <= 2 * CAP
+                sum <= if self.narrow { 4 * CAP } else { 2 * CAP }
             })
             .count()
     }

@@ -189,6 +189,55 @@ pub(crate) fn div_floor_u24(n: u64, d: u32) -> u64 {
 /// division is one instruction.
 pub(crate) const HW_DIV32: bool = cfg!(all(target_arch = "arm", target_has_atomic = "32"));
 
+/// `floor(n / d)` for `d > 0`: the traversal's edge walks ([`FloorWalk`],
+/// six per triangle and tile). One `sdiv` where the core has it; on the
+/// Cortex-M0, whose division is a library call of about 140 instructions
+/// (38,000 calls, 5.2 M instructions of the micro:bit's demo frame:
+/// measured), quotients below 8 — nearly every one: edge crossings inside
+/// a small triangle's box, steep edges' slopes — by repeated subtraction.
+///
+/// [`FloorWalk`]: crate::raster::traverse
+#[inline(always)]
+pub(crate) fn div_floor_i32(n: i32, d: i32) -> i32 {
+    div_floor_i32_by::<LONG_MUL>(n, d)
+}
+
+/// [`div_floor_i32`] by the division instruction (`HW`) or by the M0's
+/// route (the tests run both on the host).
+#[inline(always)]
+fn div_floor_i32_by<const HW: bool>(n: i32, d: i32) -> i32 {
+    debug_assert!(d > 0);
+    if HW {
+        let q = n / d;
+        return if n % d < 0 { q - 1 } else { q };
+    }
+    // floor(n / d) = -1 - floor(!n / d) for n < 0 (!n = -n - 1 >= 0).
+    let neg = n < 0;
+    let m = (if neg { !n } else { n }) as u32;
+    let q = small_quotient(m, d as u32) as i32;
+    if neg {
+        -1 - q
+    } else {
+        q
+    }
+}
+
+/// `m / d` (`d > 0`): by repeated subtraction when the quotient is below
+/// 8 (in the demo frame nearly all are 0 or 1: measured), else the
+/// library's division.
+#[cfg_attr(all(target_arch = "arm", not(target_has_atomic = "32")), inline(never))]
+fn small_quotient(m: u32, d: u32) -> u32 {
+    if d >= 1 << 28 || m >= d << 3 {
+        return m / d;
+    }
+    let (mut q, mut r) = (0, m);
+    while r >= d {
+        r -= d;
+        q += 1;
+    }
+    q
+}
+
 /// `(a / d, b / d)` rounded to nearest, ties up ([`div_round`]'s results),
 /// for `|a|, |b| < 2^62` and `d > 0`: two quotients by one divisor, each
 /// by the fastest exact route the chip has. A 64-bit host divides; a chip
@@ -474,10 +523,38 @@ mod tests {
                 assert_eq!(wide_mul_i_by::<false>(a, b), a as i64 * b as i64);
             }
         }
+        let floor = |n: i32, d: i32| (n as f64 / d as f64).floor() as i32;
+        for n in [
+            0,
+            1,
+            -1,
+            7,
+            8,
+            -8,
+            -9,
+            63,
+            64,
+            -64,
+            -65,
+            i32::MAX,
+            i32::MIN,
+            1 << 30,
+            -(1 << 30),
+        ] {
+            for d in [1, 2, 3, 7, 8, 64, 1 << 24, (1 << 28) - 1, 1 << 28, i32::MAX] {
+                assert_eq!(div_floor_i32_by::<false>(n, d), floor(n, d), "{n} / {d}");
+                assert_eq!(div_floor_i32_by::<true>(n, d), floor(n, d), "{n} / {d}");
+            }
+        }
         for _ in 0..1_000_000 {
             x ^= x << 13;
             x ^= x >> 7;
             x ^= x << 17;
+            // Quotients of every size, small ones most often.
+            let d = ((x >> 40) as i32 & 0x7fff_ffff) >> ((x >> 32) as u32 % 31);
+            let n = (x as i32) >> ((x >> 8) as u32 % 32);
+            let d = d.max(1);
+            assert_eq!(div_floor_i32_by::<false>(n, d), floor(n, d), "{n} / {d}");
             let (a, b) = (x as u32, (x >> 32) as u32);
             assert_eq!(wide_mul_by::<false>(a, b), a as u64 * b as u64);
             let (a, b) = (a as i32, b as i32);

@@ -100,7 +100,7 @@ pub(crate) trait EdgeInt:
 }
 
 macro_rules! edge_int {
-    ($($t:ty: $exact:expr),*) => {$(
+    ($($t:ty: $exact:expr, $div_floor:expr),*) => {$(
         impl EdgeInt for $t {
             const ZERO: Self = 0;
             const ONE: Self = 1;
@@ -115,13 +115,18 @@ macro_rules! edge_int {
             }
             #[inline(always)]
             fn div_floor(self, d: Self) -> Self {
-                let q = self / d;
-                if self % d < 0 { q - 1 } else { q }
+                $div_floor(self, d)
             }
         }
     )*};
 }
-edge_int!(i32: false, i64: true);
+edge_int!(
+    i32: false, crate::numeric::div_floor_i32,
+    i64: true, |n: i64, d: i64| {
+        let q = n / d;
+        if n % d < 0 { q - 1 } else { q }
+    }
+);
 
 /// Largest box side, in sub-pixels, of a triangle set up in `i32`: sides
 /// and offsets below 2^14 + 2^5 keep each product below 2^29 and every edge
@@ -489,17 +494,56 @@ trait SetupFloat:
     fn fixed16(self) -> i64;
 }
 
+/// `f32` setup: conversions from and to `i64` without the library's
+/// routines where the result is the same (measured: `__aeabi_l2f` and
+/// `__aeabi_f2lz` were 7,700 of the fast-Phong workload's 211,000
+/// instructions on the Cortex-M4F, see `reports/targets.md`).
 impl SetupFloat for f32 {
     const ZERO: Self = 0.0;
+    #[inline(always)]
     fn of(v: i64) -> Self {
-        v as f32
+        // Both conversions round the same integer to nearest: an `i32`
+        // is one `vcvt` on an FPU, an `i64` a library call (kept out of
+        // line: inline, the compiler folds the two arms back into it).
+        match i32::try_from(v) {
+            Ok(v) => v as f32,
+            Err(_) => i64_to_f32(v),
+        }
     }
     fn recip(v: i64) -> Self {
-        1.0 / v as f32
+        1.0 / Self::of(v)
     }
+    #[inline(always)]
     fn fixed16(self) -> i64 {
-        (self * 65536.0) as i64
+        f32_to_i64(self * 65536.0)
     }
+}
+
+#[inline(never)]
+fn i64_to_f32(v: i64) -> f32 {
+    v as f32
+}
+
+/// `x as i64` (truncation towards zero, saturating, NaN to 0) through
+/// 32-bit conversions (one `vcvt` each on an FPU) where they are exact:
+/// below 2^31 directly; below 2^39 `x / 2^8` is an integer (`x`'s unit in
+/// the last place is at least 2^8 past 2^31), converted and shifted back.
+/// Larger values take the library's routine.
+#[inline(always)]
+fn f32_to_i64(x: f32) -> i64 {
+    let a = x.abs();
+    if a < 2_147_483_648.0 {
+        x as i32 as i64
+    } else if a < 549_755_813_888.0 {
+        ((x * (1.0 / 256.0)) as i32 as i64) << 8
+    } else {
+        f32_to_i64_wide(x)
+    }
+}
+
+#[inline(never)]
+fn f32_to_i64_wide(x: f32) -> i64 {
+    x as i64
 }
 
 impl SetupFloat for f64 {
@@ -712,7 +756,58 @@ impl<L: Lanes> QuadPlane<L> {
 
 #[cfg(test)]
 mod tests {
-    use super::alpha_weight;
+    use super::{alpha_weight, f32_to_i64, SetupFloat};
+
+    #[test]
+    fn f32_conversions_are_the_language_casts() {
+        let edges = [
+            0.0f32,
+            -0.0,
+            0.5,
+            -0.99,
+            1.0,
+            -1.0,
+            8388607.5,
+            16777216.0,
+            -16777217.0,
+            2147483648.0,
+            // 2^63 and the float just below it, both signs.
+            9_223_372_036_854_775_808.0,
+            -9_223_372_036_854_775_808.0,
+            f32::from_bits(0x5eff_ffff),
+            f32::from_bits(0xdeff_ffff),
+            1e30,
+            -1e30,
+            f32::MAX,
+            f32::MIN,
+            f32::MIN_POSITIVE,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ];
+        for x in edges {
+            assert_eq!(f32_to_i64(x), x as i64, "{x}");
+        }
+        // Every exponent, with significands spread over their range.
+        let mut b = 0u32;
+        loop {
+            let x = f32::from_bits(b);
+            assert_eq!(f32_to_i64(x), x as i64, "{b:#x}");
+            match b.checked_add(4093) {
+                Some(n) => b = n,
+                None => break,
+            }
+        }
+        let mut v = 1i64;
+        for _ in 0..63 {
+            for d in [-1, 0, 1] {
+                for s in [v + d, -(v + d)] {
+                    assert_eq!(<f32 as SetupFloat>::of(s).to_bits(), (s as f32).to_bits());
+                }
+            }
+            v = v.wrapping_mul(2);
+        }
+    }
 
     #[test]
     fn alpha_weight_is_the_rounded_quotient() {

@@ -740,20 +740,21 @@ impl<'a> Encoded<'a> {
     #[inline(always)]
     fn walk(&self, mut f: impl FnMut(u32, Item<'_, 'a>) -> Result<(), Error>) -> Result<(), Error> {
         let all = self.0;
-        let mut pos = 0usize;
+        let (mut pos, mut key) = (0usize, 0u32);
         while let Some(rest) = all.get(pos..).filter(|r| !r.is_empty()) {
             if is_mesh(rest[0]) {
                 let (m, n) = mesh_record(rest)?;
-                let base = pos + n - m.indices.len();
                 let mut at = 0;
                 while at + 6 <= m.indices.len() {
-                    f((base + at) as u32, Item::Triangle(&m, at))?;
+                    f(key, Item::Triangle(&m, at))?;
+                    key = key.wrapping_add(1);
                     at += 6;
                 }
                 pos += n;
             } else {
                 let (cmd, n) = decode(rest)?;
-                f(pos as u32, Item::Command(&cmd))?;
+                f(key, Item::Command(&cmd))?;
+                key = key.wrapping_add(1);
                 pos += n;
             }
         }
@@ -766,32 +767,32 @@ impl<'a> Encoded<'a> {
         self.keyed().map(|r| r.map(|(_, c)| c))
     }
 
-    /// The commands with their keys: a command's byte offset, a mesh
-    /// triangle's the offset of its three indices.
+    /// The commands with their keys (their ordinals: a mesh record's
+    /// triangles count one each).
     fn keyed(&self) -> impl Iterator<Item = Result<(u32, Command), Error>> + 'a {
         let all = self.0;
-        let mut pos = 0usize;
-        // The mesh being replayed: its cursor, where its indices start
-        // (absolute) and how far it has got.
-        let mut mesh: Option<(MeshCursor<'a>, usize, usize)> = None;
+        let (mut pos, mut key) = (0usize, 0u32);
+        // The mesh being replayed: its cursor and how far it has got.
+        let mut mesh: Option<(MeshCursor<'a>, usize)> = None;
         core::iter::from_fn(move || loop {
-            if let Some((m, base, at)) = &mut mesh {
+            if let Some((m, at)) = &mut mesh {
                 if *at + 6 <= m.indices.len() {
-                    let key = (*base + *at) as u32;
                     let tri = m.triangle(*at).and_then(|c| c.validate().map(|()| c));
                     *at += 6;
                     if tri.is_err() {
                         pos = all.len();
                         mesh = None;
                     }
-                    return Some(tri.map(|c| (key, c)));
+                    let k = key;
+                    key = key.wrapping_add(1);
+                    return Some(tri.map(|c| (k, c)));
                 }
                 mesh = None;
             }
             let rest = all.get(pos..).filter(|r| !r.is_empty())?;
             let step = if is_mesh(rest[0]) {
                 mesh_record(rest).map(|(m, n)| {
-                    mesh = Some((m, pos + n - m.indices.len(), 0));
+                    mesh = Some((m, 0));
                     (None, n)
                 })
             } else {
@@ -799,10 +800,11 @@ impl<'a> Encoded<'a> {
             };
             match step {
                 Ok((cmd, n)) => {
-                    let key = pos as u32;
                     pos += n;
                     if let Some(cmd) = cmd {
-                        return Some(Ok((key, cmd)));
+                        let k = key;
+                        key = key.wrapping_add(1);
+                        return Some(Ok((k, cmd)));
                     }
                 }
                 Err(e) => {
@@ -951,9 +953,10 @@ impl SceneHeader {
 }
 
 /// An encoded list is a frame's command source read in place: it decodes
-/// (and validates) as it goes. A command's key is its byte offset (a mesh
-/// triangle's, the offset of its indices), so a tile decodes only its own
-/// commands, straight from flash.
+/// (and validates) as it goes. A command's key is its ordinal (each of a
+/// mesh record's triangles counts one), so a tile decodes only its own
+/// commands, straight from flash, and a list of fewer than 2^16 commands
+/// has keys the bins store in 16 bits ([`crate::bin`]).
 impl crate::frame::CommandSource for Encoded<'_> {
     fn each_keyed(&self, mut f: impl FnMut(u32, &Command)) -> Result<(), Error> {
         self.walk(|key, item| {
@@ -991,40 +994,44 @@ impl crate::frame::CommandSource for Encoded<'_> {
 
     fn replay(&self, keys: impl Iterator<Item = u32>, mut f: impl FnMut(&Command)) {
         let all = self.0;
-        // A record start at or before every key still to come.
-        let mut pos = 0usize;
-        // The last mesh record met: its cursor and where its indices start.
-        let mut mesh: Option<(MeshCursor<'_>, usize)> = None;
+        // A record start at or before every key still to come, and the key
+        // of its first command.
+        let (mut pos, mut next) = (0usize, 0usize);
+        // The last mesh record met: its cursor, its first triangle's key
+        // and its triangles.
+        let mut mesh: Option<(MeshCursor<'_>, usize, usize)> = None;
         // The list was validated by `each_keyed`: nothing below can fail,
         // and a key that does not name a command is skipped.
         for key in keys.map(|k| k as usize) {
-            if let Some((m, base)) = &mesh {
-                if (*base..*base + m.indices.len()).contains(&key) {
-                    if let Ok(cmd) = m.triangle(key - base) {
+            if let Some((m, first, n)) = &mesh {
+                let k = key.wrapping_sub(*first);
+                if k < *n {
+                    if let Ok(cmd) = m.triangle(6 * k) {
                         f(&cmd);
                     }
                     continue;
                 }
             }
-            while let Some(rest) = all.get(pos..).filter(|r| !r.is_empty() && pos <= key) {
+            while let Some(rest) = all.get(pos..).filter(|r| !r.is_empty() && next <= key) {
                 if is_mesh(rest[0]) {
                     let Ok((m, n)) = mesh_record(rest) else {
                         return;
                     };
-                    let base = pos + n - m.indices.len();
+                    let (first, count) = (next, m.indices.len() / 6);
                     pos += n;
-                    if key < pos {
-                        if let Some(Ok(cmd)) = key.checked_sub(base).map(|at| m.triangle(at)) {
+                    next += count;
+                    if key < next {
+                        if let Ok(cmd) = m.triangle(6 * (key - first)) {
                             f(&cmd);
                         }
-                        mesh = Some((m, base));
+                        mesh = Some((m, first, count));
                         break;
                     }
                 } else {
                     let Ok((cmd, n)) = decode(rest) else { return };
-                    let at = pos;
                     pos += n;
-                    if at == key {
+                    next += 1;
+                    if next - 1 == key {
                         f(&cmd);
                         break;
                     }

@@ -52,14 +52,15 @@ fn the_demo_from_flash_is_the_same_through_any_bins() {
     assert_eq!((st.bin_passes, st.unbinned_tiles), (1, 0));
     assert_eq!(st.replayed, none.replayed, "the same (tile, command) pairs");
     // Too small for the frame: bands, each laid out flat from the
-    // overflowing pass's counts, so a band holds up to twice the entries.
-    let (raw, st) = frame_raw::<256, DemoTileConfig, _, 2048, 32>(&frame, &cmds);
+    // overflowing pass's counts, with 16-bit keys (fewer than 2^16
+    // commands), so a band holds up to four times the entries.
+    let (raw, st) = frame_raw::<256, DemoTileConfig, _, 1024, 32>(&frame, &cmds);
     assert_eq!(raw, plain);
     assert!(st.bin_passes > 2 && st.unbinned_tiles == 0, "{st:?}");
     assert!((2049..=4096).contains(&st.bin_peak), "{st:?}");
     let pairs = st.replayed as usize;
     assert!(
-        st.bin_passes as usize <= 1 + pairs.div_ceil(2048),
+        st.bin_passes as usize <= 1 + pairs.div_ceil(1024),
         "{pairs} pairs in {st:?}"
     );
     // Too small for some tiles alone: those replay the whole list.
@@ -69,6 +70,27 @@ fn the_demo_from_flash_is_the_same_through_any_bins() {
 }
 
 type DemoTileConfig = Planes<Rgb444Format, Depth16, Wid8, Bayer8>;
+
+/// Keys of 2^16 and more (a list of 70,000 commands) stay whole in the
+/// bands: they are not packed two to a word.
+#[test]
+fn wide_keys_are_binned_whole() {
+    let mut rng = Rng::new(7);
+    let cmds: Vec<Command> = (0..70_000u32)
+        .map(|k| {
+            let (x, y) = ((rng.next_u64() % 64) as i32, (rng.next_u64() % 32) as i32);
+            let c = Rgb::new(k as u8, (k >> 8) as u8, (k >> 16) as u8);
+            Command::fill(Rect::new(x, y, 1 + k % 3, 1 + k % 2), c)
+        })
+        .collect();
+    let frame = Frame::new(64, 32, 8, 8).unwrap();
+    type C = Planes<Rgb888Format, NoDepth, NoWid, NoDither>;
+    let (plain, _) = frame_raw::<8, C, _, 0, 0>(&frame, &cmds[..]);
+    let (raw, st) = frame_raw::<8, C, _, 8192, 32>(&frame, &cmds[..]);
+    assert!(st.bin_passes > 2 && st.unbinned_tiles == 0, "{st:?}");
+    assert!(st.bin_peak <= 2 * 8192, "{st:?}");
+    assert!(raw == plain, "keys above 2^16 were cut");
+}
 
 #[test]
 fn the_demo_tile_type_holds_a_demo_tile() {
