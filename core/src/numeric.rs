@@ -63,6 +63,7 @@
 //! **Saturation.** Values are clamped to the channel range when quantized, so
 //! the dither "+1" and DDA drift never wrap.
 
+use core::num::NonZeroU32;
 use fixed::types::{I16F16, I28F4, U16F16};
 
 /// Vertex coordinate: signed pixels with 4 sub-pixel bits (`I28F4`).
@@ -383,22 +384,58 @@ fn mul_high(a: u64, b: u64) -> u64 {
 }
 
 /// Many divisions by one positive divisor `d` (a triangle's doubled area):
-/// its reciprocal `floor((2^64 - 1) / d)` is computed once, and each
-/// quotient is then a 64x64-bit high product plus at most one correction —
 /// exactly [`div_round`]'s result without a 64-bit division per quotient (a
 /// long library call on the Cortex-M4 and M0).
+///
+/// On a chip that divides 32-bit integers in hardware ([`HW_DIV32`]) and
+/// for `d < 2^24` (every triangle under 2^15 square pixels) a quotient
+/// whose dividend fits `i32` — most of a small triangle's attribute steps
+/// — is one `sdiv`, and the others take [`div_floor_u24`]'s five `udiv`s:
+/// no reciprocal is made (its 64-bit division cost about 75 instructions
+/// per triangle on the Cortex-M4, each reciprocal quotient about 35:
+/// measured, `reports/targets.md`). Otherwise the reciprocal
+/// `floor((2^64 - 1) / d)` is computed once, and each quotient is a
+/// 64x64-bit high product plus at most one correction.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Divisor {
     d: u64,
+    /// The reciprocal; 0 when `narrow`.
     r: u64,
+    /// Quotients by the division instruction (`d < 2^24` on a chip that
+    /// has one).
+    narrow: bool,
+    /// `d` when `narrow`: an unsigned divisor the compiler knows is not
+    /// zero (no check before each `udiv`).
+    d32: NonZeroU32,
 }
 
 impl Divisor {
+    /// Whether the division instruction's routes are compiled: where the
+    /// chip has one, and in the tests (which run them on the host). Not
+    /// on the Cortex-M0, whose flash they would only fill.
+    const NARROW: bool = HW_DIV32 || cfg!(test);
+
     /// For `d > 0`.
     #[inline]
     pub(crate) const fn new(d: i64) -> Self {
+        Self::new_by(d, HW_DIV32)
+    }
+
+    /// [`Self::new`] with or without the division instruction's routes
+    /// (`hw`; the tests run both on the host).
+    #[inline]
+    const fn new_by(d: i64, hw: bool) -> Self {
         let d = d as u64;
-        Divisor { d, r: u64::MAX / d }
+        let narrow = hw && d < 1 << 24;
+        Divisor {
+            d,
+            r: if narrow { 0 } else { u64::MAX / d },
+            narrow,
+            d32: match NonZeroU32::new(d as u32) {
+                Some(d) if narrow => d,
+                _ => NonZeroU32::MIN,
+            },
+        }
     }
 
     /// `floor(n / d)` for `n < 2^63`: with `r >= (2^64 - d) / d` the high
@@ -406,6 +443,9 @@ impl Divisor {
     /// correction step suffices.
     #[inline(always)]
     fn floor_u(&self, n: u64) -> u64 {
+        if Self::NARROW && self.narrow {
+            return div_floor_u24(n, self.d as u32);
+        }
         let q = mul_high(n, self.r);
         // The remainder `n - q d` lies in `[0, 2d)`: for `d < 2^31` (every
         // small triangle) it is exact in 32-bit arithmetic, one multiply.
@@ -426,6 +466,13 @@ impl Divisor {
     #[inline(always)]
     pub(crate) fn round(&self, n: i64) -> i64 {
         let num = n + (self.d / 2) as i64;
+        if Self::NARROW && self.narrow && num as i32 as i64 == num {
+            // floor(m / d) = !floor(!m / d) for m < 0 (!m = -m - 1 >= 0):
+            // one unsigned division between two sign flips.
+            let m = num as i32;
+            let s = m >> 31;
+            return (((m ^ s) as u32 / self.d32) as i32 ^ s) as i64;
+        }
         if num >= 0 {
             self.floor_u(num as u64) as i64
         } else {
@@ -616,6 +663,10 @@ mod tests {
             let d = (next() >> (1 + next() % 63)).max(1) as i64;
             let n = (next() >> (2 + next() % 62)) as i64 * if next() & 1 == 0 { 1 } else { -1 };
             assert_eq!(Divisor::new(d).round(n), div_round(n, d), "{n} / {d}");
+            if d < 1 << 24 {
+                let hw = Divisor::new_by(d, true);
+                assert_eq!(hw.round(n), div_round(n, d), "{n} / {d}");
+            }
         }
         for d in [1i64, 2, 3, 7, 255, 1 << 29, (1 << 41) - 1] {
             for n in [
@@ -630,6 +681,10 @@ mod tests {
                 -(1 << 62) + d,
             ] {
                 assert_eq!(Divisor::new(d).round(n), div_round(n, d), "{n} / {d}");
+                if d < 1 << 24 {
+                    let hw = Divisor::new_by(d, true);
+                    assert_eq!(hw.round(n), div_round(n, d), "{n} / {d}");
+                }
             }
         }
     }

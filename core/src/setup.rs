@@ -313,29 +313,14 @@ impl<L: Lanes, T: EdgeInt> TriangleSetup<L, T> {
         // only the values inside the triangle, which fit, are ever used.
         let (a1, a2) = (e[1].a.to_i64(), e[2].a.to_i64());
         let (s1, s2) = (e[1].step.to_i64(), e[2].step.to_i64());
-        let area = Divisor::new(area2);
-        // `|k| < 2^23` (validated coordinates): 32x32-bit products.
-        let grad = |d0: i32, d1: i32, k1: i64, k2: i64| {
-            debug_assert!(k1 == k1 as i32 as i64 && k2 == k2 as i32 as i64);
-            area.round(wide_mul_i(d0, k1 as i32) + wide_mul_i(d1, k2 as i32))
+        let planes = Planes {
+            area: Divisor::new(area2),
+            a: (a1, a2),
+            s: (s1, s2),
+            // The anchor's offset from vertex 0, in sub-pixels.
+            o: (anchor.0 - p0.0, anchor.1 - p0.1),
         };
-        // The anchor's value from vertex 0's, `(ox, oy)` sub-pixels away,
-        // through the rounded steps: wrapping `i64` products and an
-        // arithmetic shift give it exactly modulo 2^32, which is all the
-        // `i32` DDA keeps.
-        let (ox, oy) = (anchor.0 - p0.0, anchor.1 - p0.1);
-        // (value at the anchor, step in x, step in y) of one attribute.
-        let plane = |a0: i32, d0: i32, d1: i32| {
-            let gx = grad(d0, d1, a1, a2);
-            if T::EXACT_ROWS {
-                return (a0, gx as i32, 0);
-            }
-            let gy = grad(d0, d1, s1, s2);
-            // `|ox|, |oy| < 2^15`: within the triangle's box.
-            let off = wrapping_mul_i32(gx, ox as i32).wrapping_add(wrapping_mul_i32(gy, oy as i32));
-            let off = off.wrapping_add(SUBPIXEL / 2) >> SUBPIXEL_BITS;
-            (a0.wrapping_add(off as i32), gx as i32, gy as i32)
-        };
+        let plane = |a0: i32, d0: i32, d1: i32| planes.plane::<T>(a0, d0, d1);
         let mut lanes = [(0, 0, 0); 4];
         for (i, p) in lanes.iter_mut().enumerate().take(L::LEN) {
             *p = plane(c0.lane(i), dc[0].lane(i), dc[1].lane(i));
@@ -407,6 +392,51 @@ impl<L: Lanes, T: EdgeInt> TriangleSetup<L, T> {
             (e1 * self.inv) >> (62 - W_FRAC),
             (e2 * self.inv) >> (62 - W_FRAC),
         )
+    }
+}
+
+/// What a triangle's attribute planes share: the divisor `area2` and the
+/// edges' steps `A_1, A_2` per pixel (`a`) and per row (`s`), and the
+/// anchor's offset `o` from vertex 0 in sub-pixels.
+struct Planes {
+    area: Divisor,
+    a: (i64, i64),
+    s: (i64, i64),
+    o: (i64, i64),
+}
+
+impl Planes {
+    /// `round((d0 k1 + d1 k2) / area2)`: an attribute's step along the
+    /// edges' steps `k`. `|k| < 2^23` (validated coordinates): 32x32-bit
+    /// products.
+    #[inline(always)]
+    fn grad(&self, d0: i32, d1: i32, (k1, k2): (i64, i64)) -> i64 {
+        debug_assert!(k1 == k1 as i32 as i64 && k2 == k2 as i32 as i64);
+        self.area
+            .round(wide_mul_i(d0, k1 as i32) + wide_mul_i(d1, k2 as i32))
+    }
+
+    /// (value at the anchor, step in x, step in y) of the attribute worth
+    /// `a0` at vertex 0 and `a0 + d0`, `a0 + d1` at the others. Inlined
+    /// where flash is plenty (the Cortex-M4: four or five calls per
+    /// triangle and tile, each paying a frame and the captured values'
+    /// loads); one copy on the Cortex-M0.
+    #[cfg_attr(target_abi = "eabi", inline(never))]
+    #[cfg_attr(not(target_abi = "eabi"), inline(always))]
+    fn plane<T: EdgeInt>(&self, a0: i32, d0: i32, d1: i32) -> (i32, i32, i32) {
+        let gx = self.grad(d0, d1, self.a);
+        if T::EXACT_ROWS {
+            return (a0, gx as i32, 0);
+        }
+        let gy = self.grad(d0, d1, self.s);
+        // The anchor's value from vertex 0's through the rounded steps:
+        // wrapping `i64` products and an arithmetic shift give it exactly
+        // modulo 2^32, which is all the `i32` DDA keeps. `|ox|, |oy| <
+        // 2^15`: within the triangle's box.
+        let (ox, oy) = self.o;
+        let off = wrapping_mul_i32(gx, ox as i32).wrapping_add(wrapping_mul_i32(gy, oy as i32));
+        let off = off.wrapping_add(SUBPIXEL / 2) >> SUBPIXEL_BITS;
+        (a0.wrapping_add(off as i32), gx as i32, gy as i32)
     }
 }
 
