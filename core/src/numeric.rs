@@ -168,16 +168,23 @@ pub(crate) fn div_round(n: i64, d: i64) -> i64 {
 /// Cortex-M4 for a 24-bit divisor, measured) or a reciprocal.
 #[inline(always)]
 pub(crate) fn div_floor_u24(n: u64, d: u32) -> u64 {
+    div_floor_u24_with(n, d, |x| x / d)
+}
+
+/// [`div_floor_u24`] with each 32-bit quotient `x / d` from `div`.
+#[inline(always)]
+fn div_floor_u24_with(n: u64, d: u32, div: impl Fn(u32) -> u32) -> u64 {
     debug_assert!(d > 0 && d < 1 << 24);
     let hi = (n >> 32) as u32;
-    let (q_hi, mut r) = (hi / d, hi % d);
+    let q_hi = div(hi);
+    let mut r = hi - q_hi * d;
     let mut q_lo = 0u32;
     let lo = n as u32;
     let mut k = 4;
     while k > 0 {
         k -= 1;
         let cur = (r << 8) | ((lo >> (8 * k)) & 0xff);
-        let q = cur / d;
+        let q = div(cur);
         r = cur - q * d;
         q_lo = (q_lo << 8) | q;
     }
@@ -387,49 +394,61 @@ fn mul_high(a: u64, b: u64) -> u64 {
 /// exactly [`div_round`]'s result without a 64-bit division per quotient (a
 /// long library call on the Cortex-M4 and M0).
 ///
-/// On a chip that divides 32-bit integers in hardware ([`HW_DIV32`]) and
-/// for `d < 2^24` (every triangle under 2^15 square pixels) a quotient
-/// whose dividend fits `i32` — most of a small triangle's attribute steps
-/// — is one `sdiv`, and the others take [`div_floor_u24`]'s five `udiv`s:
-/// no reciprocal is made (its 64-bit division cost about 75 instructions
-/// per triangle on the Cortex-M4, each reciprocal quotient about 35:
-/// measured, `reports/targets.md`). Otherwise the reciprocal
-/// `floor((2^64 - 1) / d)` is computed once, and each quotient is a
-/// 64x64-bit high product plus at most one correction.
+/// For `d < 2^24` (every triangle under 2^15 square pixels) the quotients
+/// go through 32-bit divisions (`narrow`): a dividend below 2^32 takes one,
+/// a larger one [`div_floor_u24`]'s five. On a chip that divides in
+/// hardware ([`HW_DIV32`]) each is a `udiv`, and a dividend that fits `i32`
+/// — most of a small triangle's attribute steps — goes straight to it: no
+/// reciprocal is made (its 64-bit division cost about 75 instructions per
+/// triangle on the Cortex-M4, each reciprocal quotient about 35:
+/// measured). On the Cortex-M0, whose 32-bit division is a library call of
+/// about 100 instructions and 64-bit one several hundred, each is the
+/// 32-bit reciprocal `floor((2^32 - 1) / d)`'s estimate and at most one
+/// correction: one library division per triangle. Otherwise the 64-bit
+/// reciprocal `floor((2^64 - 1) / d)` is computed once, and each quotient
+/// is a 64x64-bit high product plus at most one correction.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Divisor {
     d: u64,
-    /// The reciprocal; 0 when `narrow`.
+    /// The 64-bit reciprocal; when `narrow`, the 32-bit one on the
+    /// reciprocal route, 0 on the division instruction's.
     r: u64,
-    /// Quotients by the division instruction (`d < 2^24` on a chip that
-    /// has one).
+    /// Quotients by 32-bit divisions (`d < 2^24`).
     narrow: bool,
-    /// `d` when `narrow`: an unsigned divisor the compiler knows is not
-    /// zero (no check before each `udiv`).
+    /// `d` when `narrow`: a divisor the compiler knows is not zero (no
+    /// check before each `udiv`).
     d32: NonZeroU32,
 }
 
 impl Divisor {
-    /// Whether the division instruction's routes are compiled: where the
-    /// chip has one, and in the tests (which run them on the host). Not
-    /// on the Cortex-M0, whose flash they would only fill.
-    const NARROW: bool = HW_DIV32 || cfg!(test);
+    /// Whether the division instruction's route is compiled: where the
+    /// chip has one, and in the tests (which run every route on the host).
+    const DIV32: bool = HW_DIV32 || cfg!(test);
+    /// Whether the 32-bit reciprocal's route is compiled: the Cortex-M0
+    /// (no divider), and the tests.
+    const RECIP32: bool =
+        cfg!(all(target_arch = "arm", not(target_has_atomic = "32"))) || cfg!(test);
 
     /// For `d > 0`.
     #[inline]
     pub(crate) const fn new(d: i64) -> Self {
-        Self::new_by(d, HW_DIV32)
+        Self::new_by(d, HW_DIV32 || Self::RECIP32, !HW_DIV32)
     }
 
-    /// [`Self::new`] with or without the division instruction's routes
-    /// (`hw`; the tests run both on the host).
+    /// [`Self::new`] with the 32-bit routes for `d < 2^24` (`narrow`), by
+    /// the reciprocal (`recip32`) or the division instruction: the tests
+    /// run every route on the host.
     #[inline]
-    const fn new_by(d: i64, hw: bool) -> Self {
+    const fn new_by(d: i64, narrow: bool, recip32: bool) -> Self {
         let d = d as u64;
-        let narrow = hw && d < 1 << 24;
+        let narrow = narrow && d < 1 << 24;
         Divisor {
             d,
-            r: if narrow { 0 } else { u64::MAX / d },
+            r: match (narrow, recip32) {
+                (false, _) => u64::MAX / d,
+                (true, true) => (u32::MAX / d as u32) as u64,
+                (true, false) => 0,
+            },
             narrow,
             d32: match NonZeroU32::new(d as u32) {
                 Some(d) if narrow => d,
@@ -438,13 +457,50 @@ impl Divisor {
         }
     }
 
+    /// `x / d` for `x < 2^32` when `narrow`: the instruction, or the
+    /// reciprocal's estimate `floor(x r / 2^32)`, which with
+    /// `r >= (2^32 - d) / d` is above `x / d - 1` (so at most one
+    /// correction; the remainder is below `2 d < 2^25`).
+    #[inline(always)]
+    fn quot32(&self, x: u32) -> u32 {
+        if Self::DIV32 && (!Self::RECIP32 || self.r == 0) {
+            return x / self.d32;
+        }
+        let d = self.d as u32;
+        let q = (wide_mul(x, self.r as u32) >> 32) as u32;
+        if x.wrapping_sub(q.wrapping_mul(d)) >= d {
+            q + 1
+        } else {
+            q
+        }
+    }
+
+    /// `floor(n / d)` when `narrow`: a dividend below 2^32 in one 32-bit
+    /// quotient on the reciprocal's route, else five ([`div_floor_u24`]).
+    /// One copy on the Cortex-M0, whose flash the inlined copies (every
+    /// attribute plane, area sampling, texturing) overflowed by 6 KB in
+    /// the workloads' build: a call costs little beside a quotient there.
+    #[cfg_attr(all(target_arch = "arm", not(target_has_atomic = "32")), inline(never))]
+    #[cfg_attr(
+        not(all(target_arch = "arm", not(target_has_atomic = "32"))),
+        inline(always)
+    )]
+    fn floor_narrow(&self, n: u64) -> u64 {
+        if Self::RECIP32 {
+            if let Ok(x) = u32::try_from(n) {
+                return self.quot32(x) as u64;
+            }
+        }
+        div_floor_u24_with(n, self.d as u32, |x| self.quot32(x))
+    }
+
     /// `floor(n / d)` for `n < 2^63`: with `r >= (2^64 - d) / d` the high
     /// product is at least `n / d - n / 2^64 > n / d - 1/2`, so one
     /// correction step suffices.
     #[inline(always)]
     fn floor_u(&self, n: u64) -> u64 {
-        if Self::NARROW && self.narrow {
-            return div_floor_u24(n, self.d as u32);
+        if (Self::DIV32 || Self::RECIP32) && self.narrow {
+            return self.floor_narrow(n);
         }
         let q = mul_high(n, self.r);
         // The remainder `n - q d` lies in `[0, 2d)`: for `d < 2^31` (every
@@ -466,7 +522,8 @@ impl Divisor {
     #[inline(always)]
     pub(crate) fn round(&self, n: i64) -> i64 {
         let num = n + (self.d / 2) as i64;
-        if Self::NARROW && self.narrow && num as i32 as i64 == num {
+        let by_div = Self::DIV32 && (!Self::RECIP32 || self.r == 0);
+        if by_div && self.narrow && num as i32 as i64 == num {
             // floor(m / d) = !floor(!m / d) for m < 0 (!m = -m - 1 >= 0):
             // one unsigned division between two sign flips.
             let m = num as i32;
@@ -543,6 +600,13 @@ mod tests {
             assert_eq!(q, div_round(n, d));
             assert_eq!(div_round_pair(n, -n, d), (q, div_round(-n, d)));
             assert_eq!(Divisor::new(d).round(n), q);
+            for recip32 in [false, true] {
+                let by = Divisor::new_by(d, true, recip32);
+                assert_eq!(by.round(n), q, "{n} / {d} {by:?}");
+                assert_eq!(by.round(-n), div_round(-n, d), "{} / {d} {by:?}", -n);
+                let small = n >> 30;
+                assert_eq!(by.round(small), div_round(small, d), "{small} / {d} {by:?}");
+            }
         }
         assert_eq!(div_floor_u24(u64::MAX, 1), u64::MAX);
         assert_eq!(
@@ -663,9 +727,9 @@ mod tests {
             let d = (next() >> (1 + next() % 63)).max(1) as i64;
             let n = (next() >> (2 + next() % 62)) as i64 * if next() & 1 == 0 { 1 } else { -1 };
             assert_eq!(Divisor::new(d).round(n), div_round(n, d), "{n} / {d}");
-            if d < 1 << 24 {
-                let hw = Divisor::new_by(d, true);
-                assert_eq!(hw.round(n), div_round(n, d), "{n} / {d}");
+            for (narrow, recip32) in [(true, false), (true, true), (false, false)] {
+                let by = Divisor::new_by(d, narrow, recip32);
+                assert_eq!(by.round(n), div_round(n, d), "{n} / {d} {by:?}");
             }
         }
         for d in [1i64, 2, 3, 7, 255, 1 << 29, (1 << 41) - 1] {
@@ -681,9 +745,9 @@ mod tests {
                 -(1 << 62) + d,
             ] {
                 assert_eq!(Divisor::new(d).round(n), div_round(n, d), "{n} / {d}");
-                if d < 1 << 24 {
-                    let hw = Divisor::new_by(d, true);
-                    assert_eq!(hw.round(n), div_round(n, d), "{n} / {d}");
+                for (narrow, recip32) in [(true, false), (true, true), (false, false)] {
+                    let by = Divisor::new_by(d, narrow, recip32);
+                    assert_eq!(by.round(n), div_round(n, d), "{n} / {d} {by:?}");
                 }
             }
         }
