@@ -31,8 +31,8 @@ use crate::format::{Lanes, PixelFormat};
 use crate::geom::Rect;
 use crate::geom::{pixel_bounds, QuadVertex, Vertex};
 use crate::numeric::{
-    pairs, wide_mul_i, wrapping_mul_i32, Divisor, COLOR_FRAC, SUBPIXEL, SUBPIXEL_BITS, W_FRAC,
-    Z_FRAC,
+    dot2_i16, pairs, wide_mul_i, wrapping_mul_i32, Divisor, COLOR_FRAC, LONG_MUL, SUBPIXEL,
+    SUBPIXEL_BITS, W_FRAC, Z_FRAC,
 };
 
 /// One edge as a function of pixel indices: `E(px, py) = a px + b0 + step py`.
@@ -409,11 +409,21 @@ impl Planes {
     /// `round((d0 k1 + d1 k2) / area2)`: an attribute's step along the
     /// edges' steps `k`. `|k| < 2^23` (validated coordinates): 32x32-bit
     /// products.
+    ///
+    /// A small triangle's steps (`T = i32`) are multiples of 16 below 2^18
+    /// ([`SMALL_EXTENT`] times [`SUBPIXEL`]): their sixteenths fit 15 bits,
+    /// the Cortex-M0's cheap products ([`dot2_i16`]).
     #[inline(always)]
-    fn grad(&self, d0: i32, d1: i32, (k1, k2): (i64, i64)) -> i64 {
+    fn grad<T: EdgeInt>(&self, d0: i32, d1: i32, (k1, k2): (i64, i64)) -> i64 {
         debug_assert!(k1 == k1 as i32 as i64 && k2 == k2 as i32 as i64);
-        self.area
-            .round(wide_mul_i(d0, k1 as i32) + wide_mul_i(d1, k2 as i32))
+        let n = if T::EXACT_ROWS || LONG_MUL {
+            wide_mul_i(d0, k1 as i32) + wide_mul_i(d1, k2 as i32)
+        } else {
+            debug_assert!(k1 % SUBPIXEL == 0 && k2 % SUBPIXEL == 0);
+            let (k1, k2) = ((k1 >> SUBPIXEL_BITS) as i32, (k2 >> SUBPIXEL_BITS) as i32);
+            dot2_i16(d0, k1, d1, k2) << SUBPIXEL_BITS
+        };
+        self.area.round(n)
     }
 
     /// (value at the anchor, step in x, step in y) of the attribute worth
@@ -424,11 +434,11 @@ impl Planes {
     #[cfg_attr(target_abi = "eabi", inline(never))]
     #[cfg_attr(not(target_abi = "eabi"), inline(always))]
     fn plane<T: EdgeInt>(&self, a0: i32, d0: i32, d1: i32) -> (i32, i32, i32) {
-        let gx = self.grad(d0, d1, self.a);
+        let gx = self.grad::<T>(d0, d1, self.a);
         if T::EXACT_ROWS {
             return (a0, gx as i32, 0);
         }
-        let gy = self.grad(d0, d1, self.s);
+        let gy = self.grad::<T>(d0, d1, self.s);
         // The anchor's value from vertex 0's through the rounded steps:
         // wrapping `i64` products and an arithmetic shift give it exactly
         // modulo 2^32, which is all the `i32` DDA keeps. `|ox|, |oy| <
