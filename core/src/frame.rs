@@ -355,6 +355,10 @@ impl Frame {
                 }
                 let mut full = false;
                 let spans = g.spans();
+                // The tile rows this band meets: a command's rows outside
+                // them are not walked (the micro:bit bins in several
+                // bands, and most commands miss most of them).
+                let (band_y0, band_y1) = (t0 / g.cols, (t1 - 1) / g.cols);
                 cmds.each_bounds(aa, area, |key, b| {
                     let Some((x0, x1, y0, y1)) = b.and_then(|b| spans.span(&b)) else {
                         return;
@@ -362,7 +366,7 @@ impl Frame {
                     // Exclusive ranges: an inclusive one keeps an
                     // exhausted flag (the M4 teapot's binning: 45,000
                     // instructions more, measured).
-                    for ty in y0..y1 + 1 {
+                    for ty in y0.max(band_y0)..y1.min(band_y1) + 1 {
                         let row = ty * g.cols;
                         let lo = (row + x0).max(t0);
                         let hi = (row + x1 + 1).min(t1);

@@ -299,6 +299,14 @@ fn wide_mul_by<const LONG: bool>(a: u32, b: u32) -> u64 {
 /// `__aeabi_lmul`'s.
 #[cfg_attr(all(target_arch = "arm", not(target_has_atomic = "32")), inline(never))]
 fn wide_mul_pieces(a: u32, b: u32) -> u64 {
+    wide_mul_pieces_inline(a, b)
+}
+
+/// [`wide_mul_pieces`] where it is made: the one copy in the Cortex-M0's
+/// 32-bit reciprocal quotient ([`Divisor`], eight per triangle and tile)
+/// saves the call.
+#[inline(always)]
+fn wide_mul_pieces_inline(a: u32, b: u32) -> u64 {
     let (a0, a1, b0, b1) = (a & 0xffff, a >> 16, b & 0xffff, b >> 16);
     // Each partial product is below 2^32; `mid` below 2^33 (its carry).
     let (mid, carry) = (a1 * b0).overflowing_add(a0 * b1);
@@ -507,7 +515,7 @@ impl Divisor {
             return x / self.d32;
         }
         let d = self.d as u32;
-        let q = (wide_mul(x, self.r as u32) >> 32) as u32;
+        let q = (wide_mul_pieces_inline(x, self.r as u32) >> 32) as u32;
         if x.wrapping_sub(q.wrapping_mul(d)) >= d {
             q + 1
         } else {
