@@ -31,8 +31,8 @@ use crate::format::{Lanes, PixelFormat};
 use crate::geom::Rect;
 use crate::geom::{pixel_bounds, QuadVertex, Vertex};
 use crate::numeric::{
-    dot2_i16, pairs, wide_mul_i, wrapping_mul_i32, Divisor, COLOR_FRAC, LONG_MUL, SUBPIXEL,
-    SUBPIXEL_BITS, W_FRAC, Z_FRAC,
+    dot2_i16, pairs, wide_mul_i, wrapping_mul_i32, Divisor, LONG_MUL, SUBPIXEL, SUBPIXEL_BITS,
+    W_FRAC, Z_FRAC,
 };
 
 /// One edge as a function of pixel indices: `E(px, py) = a px + b0 + step py`.
@@ -299,7 +299,7 @@ impl<L: Lanes, T: EdgeInt> TriangleSetup<L, T> {
         };
         let lanes = |v: &Vertex| {
             let c = v.color;
-            F::lanes_from_rgb([c.r as i64, c.g as i64, c.b as i64].map(|x| x << COLOR_FRAC))
+            F::lanes_from_rgb8([c.r, c.g, c.b])
         };
         let (c0, c1, c2) = (lanes(&v[0]), lanes(v1), lanes(v2));
         let dc = [c1.zip(c0, |a, b| a - b), c2.zip(c0, |a, b| a - b)];
@@ -679,9 +679,7 @@ impl<L: Lanes> QuadPlane<L> {
         // Setup order: vertex k is opposite edge e[k].
         let (i1, i2) = if t.swapped { (2, 1) } else { (1, 2) };
         let order = [0, i1, i2];
-        let lanes = |c: crate::format::Rgb| {
-            F::lanes_from_rgb([c.r as i64, c.g as i64, c.b as i64].map(|x| x << COLOR_FRAC))
-        };
+        let lanes = |c: crate::format::Rgb| F::lanes_from_rgb8([c.r, c.g, c.b]);
         let c = order.map(|k| lanes(v[k].color));
         // mid[k] lies between command vertices k and k + 1.
         let mid = |p: usize, q: usize| {

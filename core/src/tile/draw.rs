@@ -18,7 +18,7 @@ use crate::fragment::dither::{round_bias, Dither};
 use crate::fragment::{BlendMode, DepthMode, DepthPlane, ShadingMode, WidMode, WidPlane};
 use crate::geom::cell_bounds;
 use crate::geom::Rect;
-use crate::numeric::{Precision, COLOR_FRAC, SUBPIXEL as SUBPIXEL_I64, Z_FRAC};
+use crate::numeric::{Precision, SUBPIXEL as SUBPIXEL_I64, Z_FRAC};
 use crate::raster::area::{AreaSetup, Cover, Cursor};
 use crate::raster::coverage::{AaMode, AaPlane};
 use crate::raster::span::{quantize_color, quantize_z, SpanStart};
@@ -965,14 +965,14 @@ const BLEND_Z_WRITE: u8 = 3;
 /// Added to a span-loop mode: second-order colour stepping.
 const QUAD_STEP: u8 = 4;
 
-/// A colour in the output channel scale with [`COLOR_FRAC`] fraction bits.
+/// A colour in the output channel scale with [`COLOR_FRAC`](crate::numeric::COLOR_FRAC) fraction bits.
 #[inline(always)]
 fn lanes<F: PixelFormat>(c: Rgb) -> F::Lanes {
-    F::lanes_from_rgb([c.r as i64, c.g as i64, c.b as i64].map(|v| v << COLOR_FRAC))
+    F::lanes_from_rgb8([c.r, c.g, c.b])
 }
 
 /// `C_dst + (C_src - C_dst) w + bias` per lane: `src` in the output scale
-/// with [`COLOR_FRAC`] fraction bits, `dst` unpacked (whole output units),
+/// with [`COLOR_FRAC`](crate::numeric::COLOR_FRAC) fraction bits, `dst` unpacked (whole output units),
 /// `w` in 1/256 (`0..=256`). Dropping 8 of the source's 16 fraction bits
 /// keeps the products within `i32` and costs less than 2^-8 of an output
 /// unit. Computed as `(src >> 8) w + bias + dst (256 - w) 2^8`: since
