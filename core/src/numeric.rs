@@ -395,8 +395,11 @@ pub(crate) fn dot2_i16(a: i32, k: i32, b: i32, l: i32) -> i64 {
 #[inline(always)]
 fn dot2_i16_by<const LONG: bool>(a: i32, k: i32, b: i32, l: i32) -> i64 {
     if !LONG && is_i16(k) && is_i16(l) {
-        let split = |a: i32, k: i32| mul_i16((a >> 16) as u32, a as u16, k);
-        return split(a, k) + split(b, l);
+        // The high halves' products summed in 32 bits (each below 2^30),
+        // shifted once; the low halves' each below 2^31.
+        let hi = (a >> 16) * k + (b >> 16) * l;
+        let lo = |a: i32, k: i32| (a as u16 as i32 * k) as i64;
+        return ((hi as i64) << 16) + lo(a, k) + lo(b, l);
     }
     wide_mul_i_by::<LONG>(a, k) + wide_mul_i_by::<LONG>(b, l)
 }
