@@ -624,6 +624,15 @@ mod planes {
         fn get(&self, i: usize) -> u32;
         /// Stores `v` (already within the plane's bit width) at pixel index `i`.
         fn set(&mut self, i: usize, v: u32);
+        /// Stores `v` at every pixel index of `r` (`r.end <= 8 N`): a flat
+        /// span or a row of a rectangle. Cell planes override it with a
+        /// slice fill, which the compiler turns into wide stores.
+        #[inline(always)]
+        fn fill(&mut self, r: core::ops::Range<usize>, v: u32) {
+            for i in r {
+                self.set(i, v);
+            }
+        }
     }
 
     /// One element of a [`Plane`].
@@ -690,6 +699,12 @@ mod planes {
         #[inline(always)]
         fn set(&mut self, i: usize, v: u32) {
             self.0.as_flattened_mut()[i] = T::from_u32(v);
+        }
+        #[inline(always)]
+        fn fill(&mut self, r: core::ops::Range<usize>, v: u32) {
+            if let Some(cells) = self.0.as_flattened_mut().get_mut(r) {
+                cells.fill(T::from_u32(v));
+            }
         }
     }
 

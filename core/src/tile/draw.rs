@@ -29,6 +29,7 @@ use crate::texture::{
     TexVertex, Texture, TextureMode, PERSPECTIVE_AFFINE, PERSPECTIVE_EXACT, PERSPECTIVE_NONE,
     PERSPECTIVE_QUADRATIC,
 };
+use core::ops::Range;
 
 impl<const N: usize, C, F, Z, W, D, A, P, B, S, X> Tile<N, C>
 where
@@ -781,6 +782,19 @@ where
         if end > Self::CAPACITY {
             return;
         }
+        if MODE == OPAQUE
+            && !MASKED
+            && Z::BITS == 0
+            && W::BITS == 0
+            && D::LOG2 == 0
+            && (0..F::Lanes::LEN).all(|i| dc.lane(i) == 0)
+        {
+            // A flat span with nothing to test or dither: one colour,
+            // stored as a slice fill (flat-shaded triangles and span
+            // commands; host: see `reports/frames.md`).
+            self.color.fill(idx..end, Self::pack_at(x, y, c));
+            return;
+        }
         // The state steps after every pixel, the last one too (a dead
         // step: cheaper than a second exit test).
         for idx in idx..end {
@@ -845,6 +859,10 @@ where
     }
 
     fn fill_packed<const MASKED: bool>(&mut self, rect: &Rect, c: u32, mask: u32, wid: u8) {
+        if !MASKED && W::BITS == 0 {
+            // Nothing to test or keep: whole rows at once.
+            return self.for_each_row(rect, |t, r| t.color.fill(r, c));
+        }
         self.for_each_pixel(rect, |t, i| {
             if t.wid.pass(i, wid) {
                 t.put_packed::<MASKED>(i, c, mask)
@@ -855,6 +873,16 @@ where
     /// Calls `f(self, index)` for each tile pixel inside `rect`.
     #[inline]
     pub(super) fn for_each_pixel(&mut self, rect: &Rect, mut f: impl FnMut(&mut Self, usize)) {
+        self.for_each_row(rect, |t, r| {
+            for i in r {
+                f(t, i);
+            }
+        });
+    }
+
+    /// Calls `f(self, indices)` for each row of tile pixels inside `rect`.
+    #[inline]
+    fn for_each_row(&mut self, rect: &Rect, mut f: impl FnMut(&mut Self, Range<usize>)) {
         let Some(r) = rect.intersect(&self.area) else {
             return;
         };
@@ -862,9 +890,7 @@ where
         for y in 0..r.h {
             let row = ((r.y - a.y) as u32 + y) * a.w + (r.x - a.x) as u32;
             let row = row as usize;
-            for i in row..row + r.w as usize {
-                f(self, i);
-            }
+            f(self, row..row + r.w as usize);
         }
     }
 

@@ -249,9 +249,15 @@ where
     /// scale with [`COLOR_FRAC`] fraction bits, rounding bias included.
     #[inline(always)]
     fn store<const MASKED: bool>(&mut self, i: usize, x: u32, y: u32, v: F::Lanes, mask: u32) {
+        self.put_packed::<MASKED>(i, Self::pack_at(x, y, v), mask);
+    }
+
+    /// `v` (as in [`Self::store`]) dithered at screen `(x, y)`, quantized
+    /// and packed.
+    #[inline(always)]
+    fn pack_at(x: u32, y: u32, v: F::Lanes) -> u32 {
         let t = D::threshold(x, y);
-        let raw = F::pack(v.zip(F::MAX, |v, max| quantize::<D>(v, max, t)));
-        self.put_packed::<MASKED>(i, raw, mask);
+        F::pack(v.zip(F::MAX, |v, max| quantize::<D>(v, max, t)))
     }
 
     /// Composites a premultiplied colour `lanes` (output scale,
