@@ -29,7 +29,7 @@
 
 use crate::format::{Lanes, PixelFormat};
 use crate::geom::Rect;
-use crate::geom::{pixel_bounds, QuadVertex, Vertex};
+use crate::geom::{QuadVertex, SubBox, Vertex};
 use crate::numeric::{
     dot2_i16, pairs, wide_mul_i, wrapping_mul_i32, Divisor, LONG_MUL, SUBPIXEL, SUBPIXEL_BITS,
     W_FRAC, Z_FRAC,
@@ -236,16 +236,29 @@ pub(crate) fn oriented_edges(v: &[Vertex; 3]) -> Option<([Edge; 3], i64, bool)> 
 /// Whether a triangle's edge functions fit `i32` ([`SMALL_EXTENT`]).
 #[inline]
 pub(crate) fn fits_i32(v: &[Vertex; 3]) -> bool {
-    let ext = |c: [i32; 3]| {
-        let (lo, hi) = (c[0].min(c[1]).min(c[2]), c[0].max(c[1]).max(c[2]));
-        (hi as i64 - lo as i64) < SMALL_EXTENT
-    };
-    ext(v.map(|v| v.x.to_bits())) && ext(v.map(|v| v.y.to_bits()))
+    fits_box(&SubBox::of(v))
+}
+
+/// [`fits_i32`] of the triangle whose box is `b`.
+#[inline(always)]
+pub(crate) fn fits_box(b: &SubBox) -> bool {
+    let ext = |lo: i32, hi: i32| (hi as i64 - lo as i64) < SMALL_EXTENT;
+    ext(b.lo.0, b.hi.0) && ext(b.lo.1, b.hi.1)
 }
 
 impl<L: Lanes, T: EdgeInt> TriangleSetup<L, T> {
     /// Sets up a validated triangle; `None` when it has zero area or covers
     /// no pixel centre. With `T = i32` the caller has checked [`fits_i32`].
+    ///
+    /// With `alpha` (a translucent command) it also sets up the blend-weight
+    /// plane from the vertices' opacities, like one more colour channel.
+    #[inline(always)]
+    pub fn new<F: PixelFormat<Lanes = L>>(v: &[Vertex; 3], alpha: bool) -> Option<Self> {
+        Self::new_in::<F>(v, &SubBox::of(v), alpha)
+    }
+
+    /// [`Self::new`] of a triangle whose box `b` the caller has made (and
+    /// checked with [`fits_box`] for `T = i32`).
     ///
     /// On soft-float ARM targets (the Cortex-M0, whose flash is the
     /// scarcest) it stays out of line: one copy per pixel format and
@@ -254,11 +267,12 @@ impl<L: Lanes, T: EdgeInt> TriangleSetup<L, T> {
     /// Cortex-M4 (measured). Inlining cannot change a result.
     #[cfg_attr(target_abi = "eabi", inline(never))]
     #[cfg_attr(not(target_abi = "eabi"), inline(always))]
-    ///
-    /// With `alpha` (a translucent command) it also sets up the blend-weight
-    /// plane from the vertices' opacities, like one more colour channel.
-    pub fn new<F: PixelFormat<Lanes = L>>(v: &[Vertex; 3], alpha: bool) -> Option<Self> {
-        let bounds = pixel_bounds(v)?;
+    pub(crate) fn new_in<F: PixelFormat<Lanes = L>>(
+        v: &[Vertex; 3],
+        b: &SubBox,
+        alpha: bool,
+    ) -> Option<Self> {
+        let bounds = b.pixels()?;
         let (p0, mut p1, mut p2) = (sub(&v[0]), sub(&v[1]), sub(&v[2]));
         let area = |p0: (i64, i64), p1: (i64, i64), p2: (i64, i64)| {
             let d = |a: i64, b: i64| T::from_i64(a - b);

@@ -17,14 +17,14 @@ use crate::format::{ColorPlane, Lanes, PixelFormat, Rgb};
 use crate::fragment::dither::{round_bias, Dither};
 use crate::fragment::{BlendMode, DepthMode, DepthPlane, ShadingMode, WidMode, WidPlane};
 use crate::geom::cell_bounds;
-use crate::geom::Rect;
+use crate::geom::{Rect, SubBox};
 use crate::numeric::{Precision, SUBPIXEL as SUBPIXEL_I64, Z_FRAC};
 use crate::raster::area::{AreaSetup, Cover, Cursor};
 use crate::raster::coverage::{AaMode, AaPlane};
 use crate::raster::span::{quantize_color, quantize_z, SpanStart};
 use crate::raster::texmap::{self, TexSetup};
 use crate::raster::traverse::{Row, Spans};
-use crate::setup::{alpha_weight, fits_i32, EdgeInt, QuadPlane, TriangleSetup};
+use crate::setup::{alpha_weight, fits_box, fits_i32, EdgeInt, QuadPlane, TriangleSetup};
 use crate::texture::{
     TexVertex, Texture, TextureMode, PERSPECTIVE_AFFINE, PERSPECTIVE_EXACT, PERSPECTIVE_NONE,
     PERSPECTIVE_QUADRATIC,
@@ -234,11 +234,12 @@ where
         // Borrowed where it was returned: moved out of the `Option`, the
         // setup was copied once more per triangle and tile (184
         // instructions on the Cortex-M0, where `new` is out of line).
-        if fits_i32(v) {
-            if let Some(t) = &TriangleSetup::<_, i32>::new::<F>(v, alpha) {
+        let b = SubBox::of(v);
+        if fits_box(&b) {
+            if let Some(t) = &TriangleSetup::<_, i32>::new_in::<F>(v, &b, alpha) {
                 self.triangle(t, st);
             }
-        } else if let Some(t) = &TriangleSetup::<_, i64>::new::<F>(v, alpha) {
+        } else if let Some(t) = &TriangleSetup::<_, i64>::new_in::<F>(v, &b, alpha) {
             self.triangle(t, st);
         }
     }
@@ -382,11 +383,12 @@ where
     fn quadratic(&mut self, q: &[QuadVertex; 3], alpha: u8, st: &State) {
         let v = q.map(|q| q.vertex().with_alpha(alpha));
         let blend = B::ALPHA && st.blend.translucent();
-        if fits_i32(&v) {
-            if let Some(t) = &TriangleSetup::<_, i32>::new::<F>(&v, blend) {
+        let b = SubBox::of(&v);
+        if fits_box(&b) {
+            if let Some(t) = &TriangleSetup::<_, i32>::new_in::<F>(&v, &b, blend) {
                 self.quadratic_setup(q, t, st);
             }
-        } else if let Some(t) = &TriangleSetup::<_, i64>::new::<F>(&v, blend) {
+        } else if let Some(t) = &TriangleSetup::<_, i64>::new_in::<F>(&v, &b, blend) {
             self.quadratic_setup(q, t, st);
         }
     }
