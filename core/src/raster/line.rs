@@ -394,6 +394,11 @@ impl LineSetup {
 
     /// Z at column centres from `c0` on, in 16.14 (the span path adds the
     /// rounding half): floor((z0 len + t dz) 2^14 / len), below 2^50.
+    // Inlined: once the draw code grew, the compiler left it out of line,
+    // where its floor divisions made twice the 64-bit library calls
+    // (Bresenham: 133 instead of 110 instructions a step on the
+    // Cortex-M4, measured).
+    #[inline(always)]
     fn z_walk(&self, c0: i64) -> FloorWalk<i64> {
         let (len, zs) = (self.b - self.a, 1i64 << Z_FRAC);
         FloorWalk::new(
