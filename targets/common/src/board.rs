@@ -103,7 +103,7 @@ pub fn run<const ND: usize, const NS: usize, const BC: usize, const BT: usize>(
         crate::report::report_scene::<crate::report::Demo, ND, BC, BT>(
             DEMO, demo_tile, &mut out, &mut clock,
         )?;
-        #[cfg(any())]
+        #[cfg(feature = "demo")]
         crate::report::report_phases::<crate::report::Demo, ND, BC, BT>(
             DEMO, demo_tile, &mut out, &mut clock,
         )?;
