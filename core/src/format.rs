@@ -535,24 +535,20 @@ mod tests {
                 assert_eq!(scale8(c, max), scale((c as i64) << 16, max), "{c} {max}");
             }
         }
-        for c in [[0, 0, 0], [255, 255, 255], [1, 128, 254], [17, 34, 51]] {
+        fn same<F: PixelFormat<Lanes = L>, L: PartialEq + core::fmt::Debug>(c: [u8; 3]) {
             let wide = c.map(|v| (v as i64) << 16);
             assert_eq!(
-                Rgb565Format::lanes_from_rgb8(c),
-                Rgb565Format::lanes_from_rgb(wide)
+                F::lanes_from_rgb8(c),
+                F::lanes_from_rgb(wide),
+                "{}",
+                F::NAME
             );
-            assert_eq!(
-                Rgb444Format::lanes_from_rgb8(c),
-                Rgb444Format::lanes_from_rgb(wide)
-            );
-            assert_eq!(
-                Rgb888Format::lanes_from_rgb8(c),
-                Rgb888Format::lanes_from_rgb(wide)
-            );
-            assert_eq!(
-                Gray8Format::lanes_from_rgb8(c),
-                Gray8Format::lanes_from_rgb(wide)
-            );
+        }
+        for c in [[0, 0, 0], [255, 255, 255], [1, 128, 254], [17, 34, 51]] {
+            same::<Rgb565Format, _>(c);
+            same::<Rgb444Format, _>(c);
+            same::<Rgb888Format, _>(c);
+            same::<Gray8Format, _>(c);
         }
     }
 }
