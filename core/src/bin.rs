@@ -55,6 +55,8 @@ pub struct Bins<const CAP: usize, const TILES: usize> {
     key: [u32; CAP],
     next: [u32; CAP],
     len: usize,
+    /// Whether a push since the last reset found no room.
+    full: bool,
     /// Whether the lists are flat ([`Self::reset_flat`]): tile `t`'s keys
     /// fill slots `tail[t - 1]..head[t]` of the `2 CAP` words of `key` and
     /// `next` together (`head` is its write cursor, `tail` its end).
@@ -86,6 +88,7 @@ impl<const CAP: usize, const TILES: usize> Bins<CAP, TILES> {
             key: [0; CAP],
             next: [NONE; CAP],
             len: 0,
+            full: false,
             flat: false,
             top: 0,
             narrow: false,
@@ -103,6 +106,7 @@ impl<const CAP: usize, const TILES: usize> Bins<CAP, TILES> {
         self.head[..tiles].fill(NONE);
         self.tail[..tiles].fill(NONE);
         self.len = 0;
+        self.full = false;
         self.flat = false;
         self.top = 0;
         self.narrow = false;
@@ -123,6 +127,7 @@ impl<const CAP: usize, const TILES: usize> Bins<CAP, TILES> {
         self.count[..tiles].fill(0);
         self.len = end as usize;
         self.flat = true;
+        self.full = false;
     }
 
     /// Word `i` of the flat lists (`i < 2 CAP`).
@@ -167,25 +172,37 @@ impl<const CAP: usize, const TILES: usize> Bins<CAP, TILES> {
         self.len
     }
 
-    /// Appends `key` to tile `t`'s list; `false` when the bins are full
-    /// (the tile's count still grows).
-    #[inline]
-    pub(crate) fn push(&mut self, t: usize, key: u32) -> bool {
+    /// Whether the lists are flat ([`Self::reset_flat`]): a pass picks
+    /// [`Self::push_flat`] or [`Self::push_linked`] once, not per entry.
+    pub(crate) fn is_flat(&self) -> bool {
+        self.flat
+    }
+
+    /// Appends `key` to tile `t`'s flat list, or marks the bins
+    /// [full](Self::full). No count and no largest key: only a linked
+    /// pass's plan reads them ([`Self::keep_plan`]).
+    #[inline(always)]
+    pub(crate) fn push_flat(&mut self, t: usize, key: u32) {
+        let at = self.head[t];
+        if at >= self.tail[t] || !self.set_slot(at as usize, key) {
+            self.full = true;
+            return;
+        }
+        self.head[t] = at + 1;
+    }
+
+    /// Appends `key` to tile `t`'s linked list, or marks the bins
+    /// [full](Self::full) (the tile's count still grows).
+    #[inline(always)]
+    pub(crate) fn push_linked(&mut self, t: usize, key: u32) {
         self.count[t] += 1;
         // Keys increase (`CommandSource::each_keyed`): the last is the
         // largest.
         self.top = key;
-        if self.flat {
-            let at = self.head[t];
-            if at >= self.tail[t] {
-                return false;
-            }
-            self.head[t] = at + 1;
-            return self.set_slot(at as usize, key);
-        }
         let n = self.len;
         if n >= CAP {
-            return false;
+            self.full = true;
+            return;
         }
         self.key[n] = key;
         self.next[n] = NONE;
@@ -195,7 +212,13 @@ impl<const CAP: usize, const TILES: usize> Bins<CAP, TILES> {
         }
         self.tail[t] = n as u32;
         self.len = n + 1;
-        true
+    }
+
+    /// Whether a push since the last reset found no room (kept here, not
+    /// returned: a flag per push cost the binning loop 5 instructions an
+    /// entry on the Cortex-M4, measured).
+    pub(crate) fn full(&self) -> bool {
+        self.full
     }
 
     /// Keeps the last pass's counts of its first `tiles` tiles as the plan;
@@ -317,18 +340,24 @@ impl GridSpans {
     /// when it is off screen.
     #[inline]
     pub fn span(&self, r: &Rect) -> Option<(u32, u32, u32, u32)> {
-        let (w, h) = (self.w, self.h);
-        let (x1, y1) = (r.x1(), r.y1());
-        if x1 <= 0 || y1 <= 0 || r.x >= w as i32 || r.y >= h as i32 {
+        let (x0, x1) = Self::axis(r.x, r.w, self.w, self.tw)?;
+        let (y0, y1) = Self::axis(r.y, r.h, self.h, self.th)?;
+        Some((x0, x1, y0, y1))
+    }
+
+    /// The tiles of size `by` that pixels `[at, at + len)` meet on a screen
+    /// `max` pixels wide: 32-bit arithmetic only (a 64-bit end cost the
+    /// micro:bit's binning 20 instructions a command and pass).
+    #[inline(always)]
+    fn axis(at: i32, len: u32, max: u32, by: By) -> Option<(u32, u32)> {
+        if at >= max as i32 {
             return None;
         }
-        let lo = |v: i32| v.max(0) as u32;
-        let hi = |v: i64, max: u32| (v.min(max as i64) - 1) as u32;
-        Some((
-            self.tw.div(lo(r.x)),
-            self.tw.div(hi(x1, w)),
-            self.th.div(lo(r.y)),
-            self.th.div(hi(y1, h)),
-        ))
+        // The last pixel, when it is on screen.
+        let last = match u32::try_from(at) {
+            Ok(a) => a.saturating_add(len.checked_sub(1)?),
+            Err(_) => len.checked_sub(at.unsigned_abs() + 1)?,
+        };
+        Some((by.div(at.max(0) as u32), by.div(last.min(max - 1))))
     }
 }

@@ -35,6 +35,8 @@
 //!
 //! Decoding validates every command ([`Command::validate`]).
 
+use core::ops::Range;
+
 use crate::command::{Blend, Command, QuadVertex, SpanCmd, State, Vertex};
 use crate::error::Error;
 use crate::format::Rgb;
@@ -650,31 +652,56 @@ impl MeshCursor<'_> {
     /// What binning needs of the triangle at `at`: its pixels
     /// ([`Command::bounds`]), or its cells with `cells`
     /// ([`Command::coverage_bounds`]; a mesh vertex has no edge flag), from
-    /// the vertices' positions alone (the first four bytes of each).
+    /// the vertices' positions alone (the first four bytes of each); `None`
+    /// as well when they miss the pixel rows `rows` (the band of tiles being
+    /// binned), found from the y coordinates before the x are read (the
+    /// micro:bit bins its demo frame in four passes, and most triangles
+    /// miss most bands).
     #[inline(always)]
-    fn bounds(&self, at: usize, cells: bool) -> Result<Option<Rect>, Error> {
-        let p = |i: [u16; 3], s: usize| {
-            i.map(|i| {
-                let at = i as usize * s;
-                match self.vertices.get(at..at + 4) {
-                    Some(&[x0, x1, y0, y1]) => (
-                        i16::from_le_bytes([x0, x1]) as i32,
-                        i16::from_le_bytes([y0, y1]) as i32,
-                    ),
-                    _ => (0, 0),
+    fn bounds(&self, at: usize, cells: bool, rows: &Range<i32>) -> Result<Option<Rect>, Error> {
+        if self.alpha {
+            self.bounds_of::<{ MESH_VERTEX + 1 }>(at, cells, rows)
+        } else {
+            self.bounds_of::<MESH_VERTEX>(at, cells, rows)
+        }
+    }
+
+    #[inline(always)]
+    fn bounds_of<const S: usize>(
+        &self,
+        at: usize,
+        cells: bool,
+        rows: &Range<i32>,
+    ) -> Result<Option<Rect>, Error> {
+        let [a, b, c] = self.indices_of::<S>(at)?;
+        // Not `[a, b, c].map(..)`: at the micro:bit's `opt-level = "s"` an
+        // array map is a loop through the stack (22 instructions a vertex).
+        let read = |i: u16| {
+            let at = i as usize * S;
+            // `indices_of` checked that the chunk lies in the list.
+            match self.vertices.get(at..at + 4) {
+                Some(&[x0, x1, y0, y1]) => {
+                    (i16::from_le_bytes([x0, x1]), i16::from_le_bytes([y0, y1]))
                 }
-            })
+                _ => (0, 0),
+            }
         };
-        let p = if self.alpha {
-            p(self.indices_of::<{ MESH_VERTEX + 1 }>(at)?, MESH_VERTEX + 1)
-        } else {
-            p(self.indices_of::<MESH_VERTEX>(at)?, MESH_VERTEX)
+        let (a, b, c) = (read(a), read(b), read(c));
+        // Three coordinates' span, in `i16` until widened once.
+        let span = |a: i16, b: i16, c: i16| {
+            let (lo, hi) = (a.min(b).min(c) as i32, a.max(b).max(c) as i32);
+            if cells {
+                crate::geom::cell_span(lo, hi)
+            } else {
+                crate::geom::pixel_span(lo, hi)
+            }
         };
-        Ok(if cells {
-            Some(crate::geom::cell_bounds_of(p))
-        } else {
-            crate::geom::pixel_bounds_of(p)
-        })
+        let (y0, y1) = span(a.1, b.1, c.1);
+        if y0 > y1 || y1 < rows.start || y0 >= rows.end {
+            return Ok(None);
+        }
+        let (x0, x1) = span(a.0, b.0, c.0);
+        Ok((x0 <= x1).then(|| Rect::new(x0, y0, (x1 - x0 + 1) as u32, (y1 - y0 + 1) as u32)))
     }
 }
 
@@ -978,13 +1005,23 @@ impl crate::frame::CommandSource for Encoded<'_> {
         &self,
         cells: bool,
         area: bool,
+        f: impl FnMut(u32, Option<Rect>),
+    ) -> Result<(), Error> {
+        self.each_bounds_in(cells, area, i32::MIN..i32::MAX, f)
+    }
+
+    fn each_bounds_in(
+        &self,
+        cells: bool,
+        area: bool,
+        rows: Range<i32>,
         mut f: impl FnMut(u32, Option<Rect>),
     ) -> Result<(), Error> {
-        // A mesh triangle's colours and depths are not decoded (the
-        // micro:bit bins its demo frame in several passes).
+        // A mesh triangle's colours and depths are not decoded, nor its x
+        // when its y misses `rows`.
         self.walk(|key, item| {
             let b = match item {
-                Item::Triangle(m, at) => m.bounds(at, cells)?,
+                Item::Triangle(m, at) => m.bounds(at, cells, &rows)?,
                 Item::Command(cmd) => crate::frame::bin_bounds(cmd, cells, area),
             };
             f(key, b);

@@ -198,3 +198,39 @@ fn bad_sizes_and_oversized_tiles_are_errors() {
     let r = frame.render_with(&mut tile, none, |_| Ok::<(), ()>(()));
     assert_eq!(r, Err(FlushError::Raster(Error::TileTooLarge)));
 }
+
+/// `Rect::intersect` works in 32 bits; this is its definition in 64, over
+/// rectangles at every edge of `i32` and `u32` (proptest).
+fn intersect_i64(a: &Rect, b: &Rect) -> Option<Rect> {
+    let (x0, y0) = ((a.x as i64).max(b.x as i64), (a.y as i64).max(b.y as i64));
+    let (x1, y1) = (a.x1().min(b.x1()), a.y1().min(b.y1()));
+    (x0 < x1 && y0 < y1)
+        .then(|| Rect::new(x0 as i32, y0 as i32, (x1 - x0) as u32, (y1 - y0) as u32))
+}
+
+fn edge_i32() -> impl proptest::strategy::Strategy<Value = i32> {
+    use proptest::prelude::*;
+    prop_oneof![
+        any::<i32>(),
+        -40i32..40,
+        (i32::MAX - 40)..=i32::MAX,
+        i32::MIN..(i32::MIN + 40)
+    ]
+}
+
+fn edge_u32() -> impl proptest::strategy::Strategy<Value = u32> {
+    use proptest::prelude::*;
+    prop_oneof![any::<u32>(), 0u32..40, (u32::MAX - 40)..=u32::MAX]
+}
+
+proptest::proptest! {
+    #[test]
+    fn rect_intersection_matches_its_64_bit_definition(
+        a in (edge_i32(), edge_i32(), edge_u32(), edge_u32()),
+        b in (edge_i32(), edge_i32(), edge_u32(), edge_u32()),
+    ) {
+        let (a, b) = (Rect::new(a.0, a.1, a.2, a.3), Rect::new(b.0, b.1, b.2, b.3));
+        proptest::prop_assert_eq!(a.intersect(&b), intersect_i64(&a, &b));
+        proptest::prop_assert_eq!(b.intersect(&a), intersect_i64(&a, &b));
+    }
+}

@@ -108,7 +108,13 @@ where
         run.raster_ticks += clock.lap() as u64;
         if let Some(text) = label {
             let style = MonoTextStyle::new(&FONT_6X10, white);
-            let _ = Text::with_baseline(text, Point::new(6, 4), style, Baseline::Top).draw(t);
+            let text = Text::with_baseline(text, Point::new(6, 4), style, Baseline::Top);
+            // Only where the label is: drawn into every tile, its glyphs
+            // cost the micro:bit's demo frame 1.6 M instructions (measured).
+            let area: embedded_graphics::primitives::Rectangle = t.area().into();
+            if !text.bounding_box().intersection(&area).is_zero_sized() {
+                let _ = text.draw(t);
+            }
         }
         let r = t.flush(target);
         run.flush_ticks += clock.lap() as u64;
