@@ -172,10 +172,17 @@ impl<const CAP: usize, const TILES: usize> Bins<CAP, TILES> {
         self.len
     }
 
-    /// Whether the lists are flat ([`Self::reset_flat`]): a pass picks
-    /// [`Self::push_flat`] or [`Self::push_linked`] once, not per entry.
-    pub(crate) fn is_flat(&self) -> bool {
-        self.flat
+    /// Appends `key` to tile `t`'s list, or marks the bins
+    /// [full](Self::full). One copy of the binning pass serves both kinds
+    /// of list: a pass per kind cost the micro:bit 2.9 KB of flash for
+    /// 0.15 M instructions of its demo frame (measured).
+    #[inline(always)]
+    pub(crate) fn push(&mut self, t: usize, key: u32) {
+        if self.flat {
+            self.push_flat(t, key)
+        } else {
+            self.push_linked(t, key)
+        }
     }
 
     /// Appends `key` to tile `t`'s flat list, or marks the bins

@@ -389,12 +389,7 @@ impl Frame {
                     band_rows,
                     tiles: (t0, t1),
                 };
-                // The kind of list chosen once a pass, not per entry.
-                if bins.is_flat() {
-                    pass.run(cmds, |t, k| bins.push_flat(t, k))?;
-                } else {
-                    pass.run(cmds, |t, k| bins.push_linked(t, k))?;
-                }
+                pass.run(cmds, |t, k| bins.push(t, k))?;
                 let full = bins.full();
                 stats.bin_passes += 1;
                 stats.bin_peak = stats.bin_peak.max(bins.len() as u32);
