@@ -54,9 +54,8 @@ impl Rect {
     pub fn intersect(&self, o: &Rect) -> Option<Rect> {
         // 32-bit: from the larger start, what is left of each extent (a
         // tile clips every triangle it draws: 87 instructions in `i64` on
-        // the Cortex-M0, measured).
-        // Branch-free until the end (the Cortex-M4's `i64` compares are
-        // branch-free too: a branch per axis lost to them there).
+        // the Cortex-M0, measured), branch-free until the end (a branch
+        // per axis lost to the Cortex-M4's branch-free `i64` compares).
         let axis = |a: i32, wa: u32, b: i32, wb: u32| {
             let x0 = a.max(b);
             let la = wa.saturating_sub(x0.wrapping_sub(a) as u32);
