@@ -1,6 +1,9 @@
 //! Ordered dither computed from the pixel address bits (seed 001, §II.3,
-//! eqs. 1–2). No table: the threshold of an `n x n` Bayer matrix (`n = 2^L`)
-//! is a bit permutation of the low `L` bits of the screen address.
+//! eqs. 1–2). The threshold of an `n x n` Bayer matrix (`n = 2^L`) is a bit
+//! permutation of the low `L` bits of the screen address ([`threshold`]);
+//! the span loops read the same numbers from a 16 x 16 table it fills at
+//! compile time ([`Dither::threshold`]), a byte load where the seed's
+//! hardware wires the permutation.
 //!
 //! Seed eq. 2 for 8x8 (`L = 3`), `D[0]` the least significant bit:
 //! `D[0]=Y[2], D[1]=X[2]^Y[2], D[2]=Y[1], D[3]=X[1]^Y[1], D[4]=Y[0], D[5]=X[0]^Y[0]`.
@@ -18,11 +21,72 @@ pub trait Dither: 'static {
     /// `log2` of the matrix side: 0 (none), 1 (2x2), 2 (4x4), 3 (8x8), 4 (16x16).
     const LOG2: u32;
     /// The threshold at screen address `(x, y)`: [`threshold`]`(LOG2, x, y)`.
+    ///
+    /// ```
+    /// use tilerast::dither::{threshold, Bayer8, Dither};
+    /// assert_eq!(Bayer8::threshold(13, 6), threshold(3, 13, 6));
+    /// ```
     #[inline(always)]
     fn threshold(x: u32, y: u32) -> u32 {
-        threshold(Self::LOG2, x, y)
+        ((1 << (2 * Self::LOG2)) - 1) - Self::complement(x, y)
+    }
+
+    /// What quantization adds to a lane at `(x, y)`: the threshold's
+    /// complement `4^L - 1 - t` at the position of the compared fraction
+    /// bits. Read from a 16 x 16 table of complements that [`threshold`]
+    /// fills at compile time (256 bytes of flash, only for the matrix a
+    /// build uses): in a span loop the row is loop-invariant, so a pixel's
+    /// dither costs a mask, a byte load and one saturating add per lane
+    /// instead of the bit permutation's nine instructions and a compare
+    /// and increment per lane on the Cortex-M4 (measured: see
+    /// `reports/targets.md`).
+    ///
+    /// ```
+    /// use tilerast::dither::{threshold, Bayer8, Dither};
+    /// assert_eq!(Bayer8::carry(13, 6), ((63 - threshold(3, 13, 6)) << 10) as i32);
+    /// ```
+    #[inline(always)]
+    fn carry(x: u32, y: u32) -> i32 {
+        (Self::complement(x, y) << (crate::numeric::COLOR_FRAC - 2 * Self::LOG2)) as i32
+    }
+
+    /// `4^L - 1 - threshold(x, y)`, from the table.
+    #[doc(hidden)]
+    #[inline(always)]
+    fn complement(x: u32, y: u32) -> u32 {
+        let table = match Self::LOG2 {
+            0 => return 0,
+            1 => &BAYER_2,
+            2 => &BAYER_4,
+            3 => &BAYER_8,
+            _ => &BAYER_16,
+        };
+        table[(y & 15) as usize][(x & 15) as usize] as u32
     }
 }
+
+/// The complements `4^L - 1 - `[`threshold`] for `L` over one 16 x 16
+/// period of the screen (every matrix up to 16 x 16 tiles it).
+const fn bayer_table(l: u32) -> [[u8; 16]; 16] {
+    let mut t = [[0; 16]; 16];
+    let mut y = 0;
+    while y < 16 {
+        let mut x = 0;
+        while x < 16 {
+            t[y][x] = ((1 << (2 * l)) - 1 - threshold(l, x as u32, y as u32)) as u8;
+            x += 1;
+        }
+        y += 1;
+    }
+    t
+}
+
+/// The tables of [`Dither::carry`] for `L = 1..=4`, each its own
+/// `static`, so a build links only the one it reads.
+static BAYER_2: [[u8; 16]; 16] = bayer_table(1);
+static BAYER_4: [[u8; 16]; 16] = bayer_table(2);
+static BAYER_8: [[u8; 16]; 16] = bayer_table(3);
+static BAYER_16: [[u8; 16]; 16] = bayer_table(4);
 
 /// Bayer ordered dither of side `2^L`. `Bayer<0>` is no dither (round to
 /// nearest).
@@ -54,7 +118,7 @@ pub type Bayer8 = Bayer<3>;
 /// The threshold `D(x, y)` in `0..4^L` of the `2^L x 2^L` Bayer matrix at screen
 /// address `(x, y)`, from the address bits alone (seed eq. 2 generalised).
 #[inline(always)]
-pub fn threshold(l: u32, x: u32, y: u32) -> u32 {
+pub const fn threshold(l: u32, x: u32, y: u32) -> u32 {
     let xy = x ^ y;
     let mut d = 0;
     let mut k = 0;
@@ -103,6 +167,27 @@ mod tests {
         check::<4>();
     }
 
+    /// The span loops' table lookup is the address-bit threshold
+    /// everywhere on the screen, for every matrix.
+    #[test]
+    fn table_thresholds_equal_address_bits() {
+        fn check<const L: u32>() {
+            for y in (0..40).chain(u32::MAX - 40..=u32::MAX) {
+                for x in (0..40).chain(u32::MAX - 40..=u32::MAX) {
+                    let t = threshold(L, x, y);
+                    assert_eq!(Bayer::<L>::threshold(x, y), t, "L={L} {x} {y}");
+                    let c = ((1 << (2 * L)) - 1 - t) << (16 - 2 * L);
+                    assert_eq!(Bayer::<L>::carry(x, y), c as i32, "L={L} {x} {y}");
+                }
+            }
+        }
+        check::<0>();
+        check::<1>();
+        check::<2>();
+        check::<3>();
+        check::<4>();
+    }
+
     #[test]
     fn seed_equation_2_bits() {
         for y in 0..8u32 {
@@ -117,6 +202,49 @@ mod tests {
                 assert_eq!(threshold(3, x, y), d);
             }
         }
+    }
+
+    /// The carry form of [`quantize`] is the seed's compare-and-increment
+    /// for every value (the extremes included) and threshold.
+    #[test]
+    fn quantize_equals_compare_and_increment() {
+        fn check<D: Dither>() {
+            let bits = 2 * D::LOG2;
+            let values = (-70_000..70_000)
+                .step_by(7)
+                .chain((0..1 << 13).map(|k| (15 << 16) - 40 + k * 127))
+                .chain([
+                    i32::MIN,
+                    i32::MIN + 1,
+                    -1,
+                    0,
+                    1,
+                    i32::MAX - 70_000,
+                    i32::MAX - 1,
+                    i32::MAX,
+                ]);
+            for v in values {
+                for t in (0..(1u32 << bits) + 2)
+                    .step_by(1 + bits as usize / 8 * 4)
+                    .chain([u32::MAX])
+                {
+                    let int = v >> 16;
+                    let frac = ((v >> (16 - bits)) as u32) & ((1 << bits) - 1);
+                    let inc = if bits == 0 { 0 } else { (frac > t) as i32 };
+                    for max in [15, 31, 255] {
+                        assert_eq!(
+                            quantize::<D>(v, max, t),
+                            (int + inc).clamp(0, max),
+                            "{v} {t} {max}"
+                        );
+                    }
+                }
+            }
+        }
+        check::<NoDither>();
+        check::<Bayer2>();
+        check::<Bayer8>();
+        check::<Bayer<4>>();
     }
 
     #[test]
@@ -162,18 +290,35 @@ mod quant {
 
     /// Quantizes one lane (output scale, [`COLOR_FRAC`](crate::numeric::COLOR_FRAC)
     /// fraction bits, already carrying the `+0.5` bias of [`round_bias`]) to an
-    /// integer in `0..=max`, dithered with threshold `t`.
+    /// integer in `0..=max`, dithered with threshold `t`: the integer part,
+    /// plus one when the top `2 LOG2` fraction bits exceed `t` (seed
+    /// Fig. 2), clamped.
+    ///
+    /// Computed as `(v + (4^L - 1 - t) 2^(16 - 2L)) >> 16`: the complement
+    /// of the threshold added at the position of the compared bits carries
+    /// into the integer exactly when they exceed it (the bits below cannot
+    /// carry: they are under one unit of that position). The addition
+    /// saturates, so the result equals the compare-and-increment for every
+    /// `v`; per lane on the Cortex-M4 a `QADD` and a `USAT` with a shifted
+    /// operand instead of seven instructions (measured: see
+    /// `reports/targets.md`). A threshold at or above `4^L - 1` never
+    /// increments.
+    #[cfg_attr(not(feature = "unstable"), allow(dead_code))]
     #[inline(always)]
     pub fn quantize<D: Dither>(v: i32, max: i32, t: u32) -> i32 {
-        use crate::numeric::COLOR_FRAC;
-        let int = v >> COLOR_FRAC;
-        if D::LOG2 == 0 {
-            int.clamp(0, max)
-        } else {
-            let bits = 2 * D::LOG2;
-            let frac = ((v >> (COLOR_FRAC - bits)) as u32) & ((1 << bits) - 1);
-            (int + (frac > t) as i32).clamp(0, max)
-        }
+        let bits = 2 * D::LOG2;
+        let complement = ((1u32 << bits) - 1).saturating_sub(t);
+        quantize_carry(
+            v,
+            max,
+            (complement << (crate::numeric::COLOR_FRAC - bits)) as i32,
+        )
+    }
+
+    /// [`quantize`] with the threshold's [`Dither::carry`].
+    #[inline(always)]
+    pub fn quantize_carry(v: i32, max: i32, carry: i32) -> i32 {
+        (v.saturating_add(carry) >> crate::numeric::COLOR_FRAC).clamp(0, max)
     }
 
     /// The bias added once at span start so that truncation in [`quantize`]
@@ -183,7 +328,9 @@ mod quant {
     }
 }
 
+#[cfg(all(test, not(feature = "unstable")))]
+use quant::quantize;
 #[cfg(feature = "unstable")]
-pub use quant::{quantize, round_bias};
+pub use quant::{quantize, quantize_carry, round_bias};
 #[cfg(not(feature = "unstable"))]
-pub(crate) use quant::{quantize, round_bias};
+pub(crate) use quant::{quantize_carry, round_bias};

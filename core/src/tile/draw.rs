@@ -344,7 +344,7 @@ where
                         let src = F::lanes_modulated([c.r, c.g, c.b], l);
                         let out = if BLEND {
                             let old = F::unpack_masked(tile.color.get(idx), mask);
-                            mix(src, old, a >> 16, bias)
+                            mix(src, old, a >> 16, bias, false)
                         } else {
                             src.map(|v| v + bias)
                         };
@@ -686,7 +686,7 @@ where
         }
         let mask = st.plane_mask & F::MASK_ALL;
         let old = F::unpack_masked(self.color.get(idx), mask);
-        let v = mix(c, old, w, round_bias::<D>());
+        let v = mix(c, old, w, round_bias::<D>(), false);
         self.store::<true>(idx, x as u32, y as u32, v, mask);
     }
 
@@ -778,6 +778,19 @@ where
         let (mut c, mut dc, mut z) = (s.c, s.dc, s.z);
         let end = idx + n;
         let blend = MODE & !QUAD_STEP;
+        // Translucent spans of a format whose channels fit 7 bits step
+        // their colour scaled by 2^8, the rounding bias folded in ([`mix`]):
+        // the values are the same modulo 2^32 scaled, and below 2^31 at
+        // every pixel (5.24 at most).
+        let scaled =
+            blend != OPAQUE && bias >= 1 << 8 && (0..F::Lanes::LEN).all(|i| F::MAX.lane(i) < 128);
+        let ddc = if scaled {
+            c = c.map(|v| v.wrapping_add(bias).wrapping_shl(8));
+            dc = dc.map(|v| v.wrapping_shl(8));
+            ddc.map(|v| v.wrapping_shl(8))
+        } else {
+            ddc
+        };
         // Callers clip every span to the tile; saying so here lets the
         // compiler drop the per-pixel index checks of the planes.
         debug_assert!(end <= Self::CAPACITY);
@@ -816,7 +829,7 @@ where
                     } else {
                         F::unpack(raw)
                     };
-                    mix(c, old, a >> 16, bias)
+                    mix(c, old, a >> 16, bias, scaled)
                 };
                 self.store::<MASKED>(idx, x, y, v, mask);
             }
@@ -1008,10 +1021,29 @@ fn lanes<F: PixelFormat>(c: Rgb) -> F::Lanes {
 /// `dst 2^16 + ((src - dst 2^16) >> 8) w + bias` exactly, in two
 /// multiply-accumulates per lane (the Cortex-M's `MLA`) instead of a
 /// subtract, a multiply and two adds (measured: see `reports/targets.md`).
+///
+/// `scaled` (formats whose channels are below 2^7, RGB565 and smaller):
+/// `src` is `(C + bias) 2^8`, so its top halfword is `(C >> 8) + bias / 2^8`
+/// and the source product is one `SMLATT` on the Cortex-M4 (top halfword
+/// times top halfword, the weight being the top of the 8.16 weight plane),
+/// and the bias is split between the two weights:
+/// `bias = (bias / 2^8) w + (256 - w) bias / 2^8`, the first part riding
+/// in `src`, the second, `k2`, as the accumulator of `d k` (one `MLA`).
+/// The same integer as the unscaled form for every `w` (a bias of at
+/// least 2^8, a multiple of it: every dither); the Cortex-M4's translucent
+/// pixel 40 -> 37 instructions with the Z test below, the workload's
+/// blended / opaque ratio 1.67 -> 1.53 (`reports/targets.md`).
 #[inline(always)]
-fn mix<L: Lanes>(src: L, dst: L, w: i32, bias: i32) -> L {
+fn mix<L: Lanes>(src: L, dst: L, w: i32, bias: i32, scaled: bool) -> L {
     let k = (256 - w) << 8;
-    src.zip(dst, |s, d| (s >> 8) * w + bias + d * k)
+    let k2 = (256 - w) * (bias >> 8);
+    src.zip(dst, |s, d| {
+        if scaled {
+            ((s >> 16) as i16 as i32) * (w as i16 as i32) + (d * k + k2)
+        } else {
+            (s >> 8) * w + bias + d * k
+        }
+    })
 }
 
 /// Where each row of a set-up triangle starts: the DDA start (colour, Z)

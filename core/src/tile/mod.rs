@@ -13,7 +13,7 @@ use crate::config::TileConfig;
 use crate::error::Error;
 use crate::format::{ColorPlane, Lanes, PixelFormat, Rgb};
 use crate::fragment::dither::Dither;
-use crate::fragment::dither::{quantize, round_bias};
+use crate::fragment::dither::{quantize_carry, round_bias};
 use crate::fragment::{DepthMode, DepthPlane, WidMode, WidPlane};
 use crate::geom::Rect;
 use crate::numeric::{Precision, COLOR_FRAC, Z_FRAC};
@@ -256,8 +256,8 @@ where
     /// and packed.
     #[inline(always)]
     fn pack_at(x: u32, y: u32, v: F::Lanes) -> u32 {
-        let t = D::threshold(x, y);
-        F::pack(v.zip(F::MAX, |v, max| quantize::<D>(v, max, t)))
+        let carry = D::carry(x, y);
+        F::pack(v.zip(F::MAX, |v, max| quantize_carry(v, max, carry)))
     }
 
     /// Composites a premultiplied colour `lanes` (output scale,
