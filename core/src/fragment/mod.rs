@@ -158,8 +158,8 @@ mod planes {
         fn read(&self, i: usize) -> u16;
         /// The Z test of an interpolated depth `z` (16.14, rounding bias of
         /// half a unit included): passes when `z` is less than the stored
-        /// value (compared in 16.14), and stores `z` at the plane's
-        /// precision, clamped to its range.
+        /// value at the plane's precision (`z` clamped to its range), and
+        /// stores it.
         fn test_and_set(&mut self, i: usize, z: i32) -> bool;
         /// The Z test without the write (partial-coverage fragments).
         fn test(&self, i: usize, z: i32) -> bool;
@@ -197,16 +197,18 @@ mod planes {
             (z >> (crate::numeric::Z_FRAC - FRAC)).clamp(0, Self::MAX as i32) as u32
         }
 
-        /// Whether `z` (16.14) is nearer than the stored `cell`: compared
-        /// in 16.14, the cell shifted up (one compare with a shifted
-        /// operand on the Cortex-M4 instead of a shift, a clamp and a
-        /// compare; the large Gouraud + Z workload 3,403 -> 3,310 ticks,
-        /// the translucent one 5,186 -> 5,060: measured) — `stored(z) <
-        /// cell` except that a depth rounded below 0 passes over a cell of
-        /// 0 (tested).
+        /// `stored(z) < cell` for the test without the write, compared in
+        /// 16.14 with the cell shifted up: `max(z, 0) < cell 2^(14 - FRAC)`
+        /// (a floor does not change a compare with a multiple of the
+        /// step, and a cell is at most `MAX`). On the Cortex-M4 a clamp
+        /// and one compare with a shifted operand instead of a shift, a
+        /// clamp and a compare: the translucent workload 5,186 -> 5,096
+        /// ticks (measured). The test that writes keeps `stored(z)`
+        /// first: it stores it, and comparing `z` there cost the fast-Phong
+        /// loop a spilled register (5,057 -> 5,216 ticks, measured).
         #[inline(always)]
         fn nearer(z: i32, cell: u32) -> bool {
-            z < (cell << (crate::numeric::Z_FRAC - FRAC)) as i32
+            z.max(0) < (cell << (crate::numeric::Z_FRAC - FRAC)) as i32
         }
     }
 
@@ -252,9 +254,10 @@ mod planes {
         }
         #[inline(always)]
         fn test_and_set(&mut self, i: usize, z: i32) -> bool {
+            let z = Self::stored(z);
             let cell = &mut self.0 .0.as_flattened_mut()[i];
-            if Self::nearer(z, cell.to_u32()) {
-                *cell = T::from_u32(Self::stored(z));
+            if z < cell.to_u32() {
+                *cell = T::from_u32(z);
                 true
             } else {
                 false
@@ -330,12 +333,12 @@ pub(crate) use planes::{DepthPlane, WidPlane, ZPlane};
 mod tests {
     use super::planes::{DepthPlane, ZPlane};
 
-    /// The Z test compares the 16.14 depth with the cell shifted up, so it
-    /// is the integer compare of the stored value except that a depth
-    /// rounded below 0 passes over a cell of 0; what it stores is clamped
-    /// to the plane's range. Every plane precision, the extremes included.
+    /// Both Z tests compare the depth clamped to the plane's range and
+    /// rounded down to its precision with the cell (the test without the
+    /// write in 16.14, the cell shifted up), ties failing; what passes is
+    /// stored clamped. Every plane precision, the extremes included.
     #[test]
-    fn z_test_compares_in_16_14_and_stores_clamped() {
+    fn z_tests_compare_the_clamped_depth_and_store_it() {
         fn check<P: DepthPlane>(frac: u32) {
             let sh = 14 - frac;
             let max = (0x1_0000u32 << frac) - 1;
@@ -356,7 +359,7 @@ mod tests {
                     // Cell 0 holds `cell` (its integer part for `put`).
                     p.put(0, (cell >> frac) as u16);
                     let stored = (cell >> frac) << frac;
-                    let pass = z < (stored << sh) as i32;
+                    let pass = ((z >> sh).clamp(0, max as i32) as u32) < stored;
                     assert_eq!(p.test(0, z), pass, "{frac} {cell} {z}");
                     assert_eq!(p.test_and_set(0, z), pass, "{frac} {cell} {z}");
                     let kept = if pass {
