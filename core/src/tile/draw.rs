@@ -778,19 +778,21 @@ where
         let (mut c, mut dc, mut z) = (s.c, s.dc, s.z);
         let end = idx + n;
         let blend = MODE & !QUAD_STEP;
-        // Translucent spans of a format whose channels fit 7 bits step
-        // their colour scaled by 2^8, the rounding bias folded in ([`mix`]):
-        // the values are the same modulo 2^32 scaled, and below 2^31 at
-        // every pixel (5.24 at most).
-        let scaled =
-            blend != OPAQUE && bias >= 1 << 8 && (0..F::Lanes::LEN).all(|i| F::MAX.lane(i) < 128);
-        let ddc = if scaled {
+        // Translucent Gouraud spans of a format whose channels fit 7 bits
+        // step their colour scaled by 2^8, the rounding bias folded in
+        // ([`mix`]): the same values modulo 2^32, scaled, and below 2^31 at
+        // every pixel (convex combinations of the vertices' colours, 5.24
+        // at most). Quadratic colour may overshoot its vertices, so it
+        // keeps the plain form, whose 32-bit products hold values 2^8
+        // times larger.
+        let scaled = blend != OPAQUE
+            && MODE & QUAD_STEP == 0
+            && bias >= 1 << 8
+            && (0..F::Lanes::LEN).all(|i| F::MAX.lane(i) < 128);
+        if scaled {
             c = c.map(|v| v.wrapping_add(bias).wrapping_shl(8));
             dc = dc.map(|v| v.wrapping_shl(8));
-            ddc.map(|v| v.wrapping_shl(8))
-        } else {
-            ddc
-        };
+        }
         // Callers clip every span to the tile; saying so here lets the
         // compiler drop the per-pixel index checks of the planes.
         debug_assert!(end <= Self::CAPACITY);
