@@ -128,6 +128,18 @@ edge_int!(
     }
 );
 
+/// Whether a Gouraud draw sets a triangle's attribute planes up only once
+/// traversal has found a covered row ([`TriangleSetup::lazy_in`]): a sixth
+/// of a teapot frame's (triangle, tile) pairs and a quarter of the demo's
+/// cover no pixel (counted on the host), and their planes cost about 390
+/// instructions each on the Cortex-M4 (the demo frame: 7% fewer
+/// instructions, measured). Not on the Cortex-M0 (soft-float ARM): the
+/// second copy of the row loop it needs overflowed the micro:bit workloads'
+/// 256 KB of flash (by 6 to 20 KB in the variants measured), so there the
+/// setup stays one out-of-line call ([`TriangleSetup::new_in`]) before
+/// traversal. The output is the same either way.
+pub(crate) const LAZY_PLANES: bool = !cfg!(target_abi = "eabi");
+
 /// Largest box side, in sub-pixels, of a triangle set up in `i32`: sides
 /// and offsets below 2^14 + 2^5 keep each product below 2^29 and every edge
 /// value below 2^30.
@@ -168,6 +180,19 @@ pub(crate) struct TriangleSetup<L: Lanes, T> {
     pub e: [EdgeAt<T>; 3],
     /// Pixels whose centres can be inside; the anchor is its top-left.
     pub bounds: Rect,
+    /// Twice the triangle's area, sub-pixels squared (`> 0`).
+    pub area2: i64,
+    /// Whether vertices 1 and 2 were swapped to orient the triangle: edge
+    /// `e[1]` is then opposite vertex 2, `e[2]` opposite vertex 1.
+    pub swapped: bool,
+    /// The attribute planes ([`Attrs`]).
+    pub p: Attrs<L>,
+}
+
+/// A triangle's attribute planes: what [`TriangleSetup::planes`] adds
+/// to its edges.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Attrs<L: Lanes> {
     /// Colour at the anchor pixel (output scale, 16 fraction bits, modulo
     /// 2^32; small triangles only).
     pub c: L,
@@ -185,11 +210,6 @@ pub(crate) struct TriangleSetup<L: Lanes, T> {
     /// one): value at the anchor, steps in x and y, as for `c`. The weight is
     /// `256 α / 255` in 1/256 with 16 fraction bits ([`alpha_weight`]).
     pub alpha: [i32; 3],
-    /// Twice the triangle's area, sub-pixels squared (`> 0`).
-    pub area2: i64,
-    /// Whether vertices 1 and 2 were swapped to orient the triangle: edge
-    /// `e[1]` is then opposite vertex 2, `e[2]` opposite vertex 1.
-    pub swapped: bool,
     inv: i64,
     c0: L,
     dc: [L; 2],
@@ -258,7 +278,8 @@ impl<L: Lanes, T: EdgeInt> TriangleSetup<L, T> {
     }
 
     /// [`Self::new`] of a triangle whose box `b` the caller has made (and
-    /// checked with [`fits_box`] for `T = i32`).
+    /// checked with [`fits_box`] for `T = i32`): [`Self::edges_in`], then
+    /// [`Self::planes`].
     ///
     /// On soft-float ARM targets (the Cortex-M0, whose flash is the
     /// scarcest) it stays out of line: one copy per pixel format and
@@ -272,6 +293,35 @@ impl<L: Lanes, T: EdgeInt> TriangleSetup<L, T> {
         b: &SubBox,
         alpha: bool,
     ) -> Option<Self> {
+        let mut t = Self::edges_in(v, b)?;
+        t.p = t.planes::<F>(v, alpha);
+        Some(t)
+    }
+
+    /// What a draw sets up before traversal: [`Self::edges_in`] where
+    /// [`LAZY_PLANES`], else [`Self::new_in`].
+    #[inline(always)]
+    pub(crate) fn lazy_in<F: PixelFormat<Lanes = L>>(
+        v: &[Vertex; 3],
+        b: &SubBox,
+        alpha: bool,
+    ) -> Option<Self> {
+        if LAZY_PLANES {
+            Self::edges_in(v, b)
+        } else {
+            Self::new_in::<F>(v, b, alpha)
+        }
+    }
+
+    /// The first half of the setup: the oriented edges, the pixel bounds
+    /// and the doubled area; the attribute planes are zero until
+    /// [`Self::planes`]. `None` when the triangle has zero area or
+    /// its box holds no pixel centre. A caller that traverses first sets
+    /// the planes up only for a triangle that covers a pixel of its tile:
+    /// a sixth of a teapot frame's (triangle, tile) pairs cover none, a
+    /// quarter of the demo's (counted on the host).
+    #[inline(always)]
+    pub(crate) fn edges_in(v: &[Vertex; 3], b: &SubBox) -> Option<Self> {
         let bounds = b.pixels()?;
         let (p0, mut p1, mut p2) = (sub(&v[0]), sub(&v[1]), sub(&v[2]));
         let area = |p0: (i64, i64), p1: (i64, i64), p2: (i64, i64)| {
@@ -287,11 +337,7 @@ impl<L: Lanes, T: EdgeInt> TriangleSetup<L, T> {
             core::mem::swap(&mut p1, &mut p2);
             area2 = -area2;
         }
-        let half = SUBPIXEL / 2;
-        let anchor = (
-            SUBPIXEL * bounds.x as i64 + half,
-            SUBPIXEL * bounds.y as i64 + half,
-        );
+        let anchor = anchor(&bounds);
         let edge = |p: (i64, i64), q: (i64, i64)| {
             let d = |a: i64, b: i64| T::from_i64(a - b);
             let (dx, dy) = (d(q.0, p.0), d(q.1, p.1));
@@ -305,8 +351,30 @@ impl<L: Lanes, T: EdgeInt> TriangleSetup<L, T> {
             }
         };
         let e = [edge(p1, p2), edge(p2, p0), edge(p0, p1)];
-        let area2 = area2.to_i64();
-        let (v1, v2) = if swapped {
+        Some(TriangleSetup {
+            e,
+            bounds,
+            area2: area2.to_i64(),
+            swapped,
+            p: Attrs::zero(),
+        })
+    }
+
+    /// The second half of the setup: the attribute planes of the triangle
+    /// [`Self::edges_in`] made from the same vertices `v` (with `alpha`,
+    /// a translucent command, the blend-weight plane too, like one more
+    /// colour channel), for the caller to store in [`Self::p`] (the edges
+    /// may be borrowed meanwhile: traversal has started).
+    #[inline(always)]
+    pub(crate) fn planes<F: PixelFormat<Lanes = L>>(
+        &self,
+        v: &[Vertex; 3],
+        alpha: bool,
+    ) -> Attrs<L> {
+        let (e, area2) = (&self.e, self.area2);
+        let p0 = sub(&v[0]);
+        let anchor = anchor(&self.bounds);
+        let (v1, v2) = if self.swapped {
             (&v[2], &v[1])
         } else {
             (&v[1], &v[2])
@@ -348,17 +416,14 @@ impl<L: Lanes, T: EdgeInt> TriangleSetup<L, T> {
         } else {
             (0, [0; 2], [0; 3])
         };
-        let t = TriangleSetup {
-            e,
-            bounds,
+        Attrs {
             c: L::from_fn(|i| lanes[i].0),
             z,
             gc: L::from_fn(|i| lanes[i].1),
             gz,
             gcy: L::from_fn(|i| lanes[i].2),
             gzy,
-            area2,
-            swapped,
+            alpha,
             inv: if T::EXACT_ROWS {
                 (1i64 << 62) / area2
             } else {
@@ -370,9 +435,7 @@ impl<L: Lanes, T: EdgeInt> TriangleSetup<L, T> {
             dz,
             a0,
             da,
-            alpha,
-        };
-        Some(t)
+        }
     }
 
     /// Colour and Z at a pixel inside the triangle, from the unbiased edge
@@ -382,30 +445,65 @@ impl<L: Lanes, T: EdgeInt> TriangleSetup<L, T> {
         let (w1, w2) = self.weights(e1, e2);
         let c = L::from_fn(|i| {
             lerp(
-                self.c0.lane(i),
-                self.dc[0].lane(i),
-                self.dc[1].lane(i),
+                self.p.c0.lane(i),
+                self.p.dc[0].lane(i),
+                self.p.dc[1].lane(i),
                 w1,
                 w2,
             )
         });
-        (c, lerp(self.z0, self.dz[0], self.dz[1], w1, w2))
+        (c, lerp(self.p.z0, self.p.dz[0], self.p.dz[1], w1, w2))
     }
 
     /// The blend weight at the same pixel as [`Self::start`], same error.
     #[inline]
     pub fn alpha_start(&self, e1: i64, e2: i64) -> i32 {
         let (w1, w2) = self.weights(e1, e2);
-        lerp(self.a0, self.da[0], self.da[1], w1, w2)
+        lerp(self.p.a0, self.p.da[0], self.p.da[1], w1, w2)
     }
 
     /// Barycentric weights `w1, w2` with [`W_FRAC`] fraction bits.
     #[inline(always)]
     fn weights(&self, e1: i64, e2: i64) -> (i64, i64) {
         (
-            (e1 * self.inv) >> (62 - W_FRAC),
-            (e2 * self.inv) >> (62 - W_FRAC),
+            (e1 * self.p.inv) >> (62 - W_FRAC),
+            (e2 * self.p.inv) >> (62 - W_FRAC),
         )
+    }
+}
+
+/// The centre of the anchor pixel (the top-left of `bounds`), in
+/// sub-pixels.
+#[inline(always)]
+fn anchor(bounds: &Rect) -> (i64, i64) {
+    let half = SUBPIXEL / 2;
+    (
+        SUBPIXEL * bounds.x as i64 + half,
+        SUBPIXEL * bounds.y as i64 + half,
+    )
+}
+
+impl<L: Lanes> Attrs<L> {
+    /// No planes yet ([`TriangleSetup::edges_in`]).
+    #[inline(always)]
+    fn zero() -> Self {
+        let zero = L::from_fn(|_| 0);
+        Attrs {
+            c: zero,
+            z: 0,
+            gc: zero,
+            gz: 0,
+            gcy: zero,
+            gzy: 0,
+            alpha: [0; 3],
+            inv: 0,
+            c0: zero,
+            dc: [zero; 2],
+            z0: 0,
+            dz: [0; 2],
+            a0: 0,
+            da: [0; 2],
+        }
     }
 }
 

@@ -24,7 +24,9 @@ use crate::raster::coverage::{AaMode, AaPlane};
 use crate::raster::span::{quantize_color, quantize_z, SpanStart};
 use crate::raster::texmap::{self, TexSetup};
 use crate::raster::traverse::{Row, Spans};
-use crate::setup::{alpha_weight, fits_box, fits_i32, EdgeInt, QuadPlane, TriangleSetup};
+use crate::setup::{
+    alpha_weight, fits_box, fits_i32, EdgeInt, QuadPlane, TriangleSetup, LAZY_PLANES,
+};
 use crate::texture::{
     TexVertex, Texture, TextureMode, PERSPECTIVE_AFFINE, PERSPECTIVE_EXACT, PERSPECTIVE_NONE,
     PERSPECTIVE_QUADRATIC,
@@ -198,7 +200,9 @@ where
                     }
                 })
             }
-            Command::WidFill { rect, wid } => self.for_each_pixel(rect, |t, i| t.wid.put(i, *wid)),
+            Command::WidFill { rect, wid } => {
+                self.for_each_row(rect, |t, r| t.wid.put_range(r, *wid))
+            }
         }
     }
 
@@ -206,15 +210,36 @@ where
     /// without drawing it.
     #[inline(always)]
     fn triangle_upto<const UPTO: u8, T: EdgeInt>(&mut self, v: &[crate::command::Vertex; 3]) {
-        let Some(t) = TriangleSetup::<_, T>::new::<F>(v, false) else {
+        // As the draw does ([`LAZY_PLANES`]): the edges, the first covered
+        // row, then the attribute planes of a triangle that covers a pixel;
+        // or the whole setup first.
+        let Some(mut t) = TriangleSetup::<_, T>::lazy_in::<F>(v, &SubBox::of(v), false) else {
             return;
         };
+        let area = self.area;
+        if !LAZY_PLANES {
+            return Self::rows_upto::<UPTO, T>(&t, Spans::new(&t.e, &t.bounds, &area));
+        }
+        let mut rows = Spans::new(&t.e, &t.bounds, &area);
+        if rows.next().is_some() {
+            t.p = t.planes::<F>(v, false);
+        }
+        Self::rows_upto::<UPTO, T>(&t, rows)
+    }
+
+    /// The rows of [`Self::triangle_upto`] from [`Phase::Traverse`] on,
+    /// else the setup, kept from being optimised away.
+    #[inline(always)]
+    fn rows_upto<const UPTO: u8, T: EdgeInt>(
+        t: &TriangleSetup<F::Lanes, T>,
+        rows: impl Iterator<Item = Row>,
+    ) {
         if UPTO >= Phase::Traverse as u8 {
-            for row in Spans::new(&t.e, &t.bounds, &self.area) {
+            for row in rows {
                 core::hint::black_box(row);
             }
         } else {
-            core::hint::black_box(&t);
+            core::hint::black_box(t);
         }
     }
 
@@ -230,17 +255,18 @@ where
                 self.gouraud_area::<i64>(v, st)
             };
         }
-        let alpha = B::ALPHA && st.blend.translucent();
         // Borrowed where it was returned: moved out of the `Option`, the
         // setup was copied once more per triangle and tile (184
-        // instructions on the Cortex-M0, where `new` is out of line).
+        // instructions on the Cortex-M0, where `new` is out of line). Where
+        // [`LAZY_PLANES`], the attribute planes wait for a covered row.
         let b = SubBox::of(v);
+        let alpha = B::ALPHA && st.blend.translucent();
         if fits_box(&b) {
-            if let Some(t) = &TriangleSetup::<_, i32>::new_in::<F>(v, &b, alpha) {
-                self.triangle(t, st);
+            if let Some(t) = &mut TriangleSetup::<_, i32>::lazy_in::<F>(v, &b, alpha) {
+                self.triangle::<_, LAZY_PLANES>(t, v, st);
             }
-        } else if let Some(t) = &TriangleSetup::<_, i64>::new_in::<F>(v, &b, alpha) {
-            self.triangle(t, st);
+        } else if let Some(t) = &mut TriangleSetup::<_, i64>::lazy_in::<F>(v, &b, alpha) {
+            self.triangle::<_, LAZY_PLANES>(t, v, st);
         }
     }
 
@@ -301,7 +327,7 @@ where
         tex: &Texture<'_>,
         st: &State,
     ) {
-        let ga = t.alpha[1];
+        let ga = t.p.alpha[1];
         let zwrite = !BLEND || st.blend == Blend::AlphaZWrite;
         let mask = st.plane_mask & F::MASK_ALL;
         let bias = round_bias::<D>();
@@ -372,8 +398,13 @@ where
 
     /// Draws a set-up triangle, opaque or blended by its state.
     #[inline(always)]
-    fn triangle<T: EdgeInt>(&mut self, t: &TriangleSetup<F::Lanes, T>, st: &State) {
-        self.triangle_shaded::<T, false>(t, &QuadPlane::unused(), st);
+    fn triangle<T: EdgeInt, const LAZY: bool>(
+        &mut self,
+        t: &mut TriangleSetup<F::Lanes, T>,
+        v: &[crate::command::Vertex; 3],
+        st: &State,
+    ) {
+        self.triangle_shaded::<T, false, LAZY>(t, v, &QuadPlane::unused(), st);
     }
 
     /// A quadratic (fast Phong) triangle: its quadratic colour planes when
@@ -385,11 +416,11 @@ where
         let blend = B::ALPHA && st.blend.translucent();
         let b = SubBox::of(&v);
         if fits_box(&b) {
-            if let Some(t) = &TriangleSetup::<_, i32>::new_in::<F>(&v, &b, blend) {
-                self.quadratic_setup(q, t, st);
+            if let Some(t) = &mut TriangleSetup::<_, i32>::new_in::<F>(&v, &b, blend) {
+                self.quadratic_setup(q, &v, t, st);
             }
-        } else if let Some(t) = &TriangleSetup::<_, i64>::new_in::<F>(&v, &b, blend) {
-            self.quadratic_setup(q, t, st);
+        } else if let Some(t) = &mut TriangleSetup::<_, i64>::new_in::<F>(&v, &b, blend) {
+            self.quadratic_setup(q, &v, t, st);
         }
     }
 
@@ -397,44 +428,76 @@ where
     fn quadratic_setup<T: EdgeInt>(
         &mut self,
         q: &[QuadVertex; 3],
-        t: &TriangleSetup<F::Lanes, T>,
+        v: &[crate::command::Vertex; 3],
+        t: &mut TriangleSetup<F::Lanes, T>,
         st: &State,
     ) {
         match S::QUADRATIC.then(|| QuadPlane::new::<F, T>(q, t)) {
-            Some(Some(p)) => self.triangle_shaded::<T, true>(t, &p, st),
-            _ => self.triangle(t, st),
+            Some(Some(p)) => self.triangle_shaded::<T, true, false>(t, v, &p, st),
+            _ => self.triangle::<T, false>(t, v, st),
         }
     }
 
     /// A set-up triangle, opaque or blended by its state, Gouraud or (with
-    /// `QUAD`) quadratic.
+    /// `QUAD`) quadratic, from the vertices `v`; with `LAZY`, only its
+    /// edges are set up so far.
     #[inline(always)]
-    fn triangle_shaded<T: EdgeInt, const QUAD: bool>(
+    fn triangle_shaded<T: EdgeInt, const QUAD: bool, const LAZY: bool>(
         &mut self,
-        t: &TriangleSetup<F::Lanes, T>,
+        t: &mut TriangleSetup<F::Lanes, T>,
+        v: &[crate::command::Vertex; 3],
         q: &QuadPlane<F::Lanes>,
         st: &State,
     ) {
         if B::ALPHA && st.blend.translucent() {
-            self.triangle_rows::<T, true, QUAD>(t, q, st);
+            self.triangle_rows::<T, true, QUAD, LAZY>(t, v, q, st);
         } else {
-            self.triangle_rows::<T, false, QUAD>(t, q, st);
+            self.triangle_rows::<T, false, QUAD, LAZY>(t, v, q, st);
         }
     }
 
     /// The rows of a triangle, each one span; `BLEND`: through
     /// [`Self::blend_span`] with the triangle's blend-weight plane; `QUAD`:
     /// colour from the quadratic planes `q` instead of the linear ones.
+    /// With `LAZY` (a triangle whose edges only are set up, from the
+    /// vertices `v`) an opaque triangle's attribute planes are set up once
+    /// the first covered row is found: none for a triangle that covers no
+    /// pixel of the tile.
     #[inline(always)]
-    fn triangle_rows<T: EdgeInt, const BLEND: bool, const QUAD: bool>(
+    fn triangle_rows<T: EdgeInt, const BLEND: bool, const QUAD: bool, const LAZY: bool>(
         &mut self,
-        t: &TriangleSetup<F::Lanes, T>,
+        t: &mut TriangleSetup<F::Lanes, T>,
+        v: &[crate::command::Vertex; 3],
         q: &QuadPlane<F::Lanes>,
         st: &State,
     ) {
-        let starts = RowStarts::new::<P, T>(t);
         let area = self.area;
-        for row in Spans::new(&t.e, &t.bounds, &area) {
+        if !LAZY || BLEND {
+            // One copy of the traversal: the Cortex-M0's flash, and
+            // translucent triangles, whose span loop the copy below slowed
+            // (the M4's blend workload 5,044 -> 5,107 ticks, measured).
+            if LAZY {
+                t.p = t.planes::<F>(v, BLEND);
+            }
+            let t = &*t;
+            let starts = RowStarts::new::<P, T>(t);
+            for row in Spans::new(&t.e, &t.bounds, &area) {
+                self.triangle_row::<T, BLEND, QUAD>(t, q, &starts, &row, st);
+            }
+            return;
+        }
+        // The first row peeled off, its own copy of the row's code, then
+        // the same loop as above (on the Cortex-M4 a flag tested per row
+        // cost 3% of a teapot frame and one loop that takes the first row
+        // first 20%: measured).
+        let mut rows = Spans::new(&t.e, &t.bounds, &area);
+        let Some(first) = rows.next() else {
+            return;
+        };
+        t.p = t.planes::<F>(v, BLEND);
+        let starts = RowStarts::new::<P, T>(t);
+        self.triangle_row::<T, BLEND, QUAD>(t, q, &starts, &first, st);
+        for row in rows {
             self.triangle_row::<T, BLEND, QUAD>(t, q, &starts, &row, st);
         }
     }
@@ -458,7 +521,7 @@ where
             start
         };
         if BLEND {
-            self.blend_span::<true, QUAD>(x0, py, n, start, q.ddc, (a, t.alpha[1]), st);
+            self.blend_span::<true, QUAD>(x0, py, n, start, q.ddc, (a, t.p.alpha[1]), st);
         } else {
             self.span_with::<QUAD>(x0, py, n, start, q.ddc, st);
         }
@@ -1071,14 +1134,14 @@ impl<L: Lanes> RowStarts<L> {
     fn new<P: Precision, T: EdgeInt>(t: &TriangleSetup<L, T>) -> Self {
         RowStarts {
             plane: SpanStart {
-                c: t.c,
-                dc: t.gc,
-                z: t.z,
-                dz: t.gz,
+                c: t.p.c,
+                dc: t.p.gc,
+                z: t.p.z,
+                dz: t.p.gz,
             }
             .quantized::<P>(),
-            gcy: quantize_color::<P, _>(t.gcy),
-            gzy: quantize_z::<P>(t.gzy),
+            gcy: quantize_color::<P, _>(t.p.gcy),
+            gzy: quantize_z::<P>(t.p.gzy),
             ax: t.bounds.x as i64,
             ay: t.bounds.y as i64,
         }
@@ -1094,7 +1157,7 @@ impl<L: Lanes> RowStarts<L> {
         let Row {
             py, xr, x0, e1, e2, ..
         } = *row;
-        let [a_anchor, ga, gay] = t.alpha;
+        let [a_anchor, ga, gay] = t.p.alpha;
         if T::EXACT_ROWS {
             // Restart from the plane equation at xr, then advance to x0
             // by multiplication: exactly the values x0 - xr DDA steps
@@ -1109,9 +1172,9 @@ impl<L: Lanes> RowStarts<L> {
             };
             let s = SpanStart {
                 c,
-                dc: t.gc,
+                dc: t.p.gc,
                 z,
-                dz: t.gz,
+                dz: t.p.gz,
             };
             (s.quantized::<P>().advanced(k), a)
         } else {
