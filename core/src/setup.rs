@@ -128,18 +128,6 @@ edge_int!(
     }
 );
 
-/// Whether a Gouraud draw sets a triangle's attribute planes up only once
-/// traversal has found a covered row ([`TriangleSetup::lazy_in`]): a sixth
-/// of a teapot frame's (triangle, tile) pairs and a quarter of the demo's
-/// cover no pixel (counted on the host), and their planes cost about 390
-/// instructions each on the Cortex-M4 (the demo frame: 7% fewer
-/// instructions, measured). Not on the Cortex-M0 (soft-float ARM): the
-/// second copy of the row loop it needs overflowed the micro:bit workloads'
-/// 256 KB of flash (by 6 to 20 KB in the variants measured), so there the
-/// setup stays one out-of-line call ([`TriangleSetup::new_in`]) before
-/// traversal. The output is the same either way.
-pub(crate) const LAZY_PLANES: bool = !cfg!(target_abi = "eabi");
-
 /// Largest box side, in sub-pixels, of a triangle set up in `i32`: sides
 /// and offsets below 2^14 + 2^5 keep each product below 2^29 and every edge
 /// value below 2^30.
@@ -298,28 +286,14 @@ impl<L: Lanes, T: EdgeInt> TriangleSetup<L, T> {
         Some(t)
     }
 
-    /// What a draw sets up before traversal: [`Self::edges_in`] where
-    /// [`LAZY_PLANES`], else [`Self::new_in`].
-    #[inline(always)]
-    pub(crate) fn lazy_in<F: PixelFormat<Lanes = L>>(
-        v: &[Vertex; 3],
-        b: &SubBox,
-        alpha: bool,
-    ) -> Option<Self> {
-        if LAZY_PLANES {
-            Self::edges_in(v, b)
-        } else {
-            Self::new_in::<F>(v, b, alpha)
-        }
-    }
-
     /// The first half of the setup: the oriented edges, the pixel bounds
     /// and the doubled area; the attribute planes are zero until
     /// [`Self::planes`]. `None` when the triangle has zero area or
     /// its box holds no pixel centre. A caller that traverses first sets
-    /// the planes up only for a triangle that covers a pixel of its tile:
-    /// a sixth of a teapot frame's (triangle, tile) pairs cover none, a
-    /// quarter of the demo's (counted on the host).
+    /// the planes up only for a triangle that covers a pixel of its tile
+    /// (a Gouraud draw): a sixth of a teapot frame's (triangle, tile) pairs
+    /// cover none, a quarter of the demo's (counted on the host), and a
+    /// triangle's planes cost about 390 instructions on the Cortex-M4.
     #[inline(always)]
     pub(crate) fn edges_in(v: &[Vertex; 3], b: &SubBox) -> Option<Self> {
         let bounds = b.pixels()?;

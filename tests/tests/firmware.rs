@@ -520,7 +520,7 @@ fn firmware_output_is_bit_identical_to_the_host() {
             );
             r.benches.extend(b1.benches);
             r.bench_crcs.extend(b1.bench_crcs);
-            // And the area-sampling and texture-tolerance workloads, another.
+            // And the area-sampling and texturing workloads, another.
             let area = parse(&run(board, &build(board, &scenes, Some("bench_extra"))));
             r.benches.extend(area.benches);
             r.bench_crcs.extend(area.bench_crcs);

@@ -24,9 +24,7 @@ use crate::raster::coverage::{AaMode, AaPlane};
 use crate::raster::span::{quantize_color, quantize_z, SpanStart};
 use crate::raster::texmap::{self, TexSetup};
 use crate::raster::traverse::{Row, Spans};
-use crate::setup::{
-    alpha_weight, fits_box, fits_i32, EdgeInt, QuadPlane, TriangleSetup, LAZY_PLANES,
-};
+use crate::setup::{alpha_weight, fits_box, fits_i32, EdgeInt, QuadPlane, TriangleSetup};
 use crate::texture::{
     TexVertex, Texture, TextureMode, PERSPECTIVE_AFFINE, PERSPECTIVE_EXACT, PERSPECTIVE_NONE,
     PERSPECTIVE_QUADRATIC,
@@ -210,36 +208,21 @@ where
     /// without drawing it.
     #[inline(always)]
     fn triangle_upto<const UPTO: u8, T: EdgeInt>(&mut self, v: &[crate::command::Vertex; 3]) {
-        // As the draw does ([`LAZY_PLANES`]): the edges, the first covered
-        // row, then the attribute planes of a triangle that covers a pixel;
-        // or the whole setup first.
-        let Some(mut t) = TriangleSetup::<_, T>::lazy_in::<F>(v, &SubBox::of(v), false) else {
+        // As the draw does: the edges, the first covered row, then the
+        // attribute planes of a triangle that covers a pixel.
+        let Some(mut t) = TriangleSetup::<_, T>::edges_in(v, &SubBox::of(v)) else {
             return;
         };
-        let area = self.area;
-        if !LAZY_PLANES {
-            return Self::rows_upto::<UPTO, T>(&t, Spans::new(&t.e, &t.bounds, &area));
-        }
-        let mut rows = Spans::new(&t.e, &t.bounds, &area);
+        let mut rows = Spans::new(&t.e, &t.bounds, &self.area);
         if rows.next().is_some() {
             t.p = t.planes::<F>(v, false);
         }
-        Self::rows_upto::<UPTO, T>(&t, rows)
-    }
-
-    /// The rows of [`Self::triangle_upto`] from [`Phase::Traverse`] on,
-    /// else the setup, kept from being optimised away.
-    #[inline(always)]
-    fn rows_upto<const UPTO: u8, T: EdgeInt>(
-        t: &TriangleSetup<F::Lanes, T>,
-        rows: impl Iterator<Item = Row>,
-    ) {
         if UPTO >= Phase::Traverse as u8 {
             for row in rows {
                 core::hint::black_box(row);
             }
         } else {
-            core::hint::black_box(t);
+            core::hint::black_box(&t);
         }
     }
 
@@ -257,16 +240,15 @@ where
         }
         // Borrowed where it was returned: moved out of the `Option`, the
         // setup was copied once more per triangle and tile (184
-        // instructions on the Cortex-M0, where `new` is out of line). Where
-        // [`LAZY_PLANES`], the attribute planes wait for a covered row.
+        // instructions on the Cortex-M0, where `new` is out of line). The
+        // attribute planes wait for a covered row.
         let b = SubBox::of(v);
-        let alpha = B::ALPHA && st.blend.translucent();
         if fits_box(&b) {
-            if let Some(t) = &mut TriangleSetup::<_, i32>::lazy_in::<F>(v, &b, alpha) {
-                self.triangle::<_, LAZY_PLANES>(t, v, st);
+            if let Some(t) = &mut TriangleSetup::<_, i32>::edges_in(v, &b) {
+                self.triangle::<_, true>(t, v, st);
             }
-        } else if let Some(t) = &mut TriangleSetup::<_, i64>::lazy_in::<F>(v, &b, alpha) {
-            self.triangle::<_, LAZY_PLANES>(t, v, st);
+        } else if let Some(t) = &mut TriangleSetup::<_, i64>::edges_in(v, &b) {
+            self.triangle::<_, true>(t, v, st);
         }
     }
 
@@ -473,9 +455,9 @@ where
     ) {
         let area = self.area;
         if !LAZY || BLEND {
-            // One copy of the traversal: the Cortex-M0's flash, and
-            // translucent triangles, whose span loop the copy below slowed
-            // (the M4's blend workload 5,044 -> 5,107 ticks, measured).
+            // One copy of the traversal for translucent triangles, whose
+            // span loop the copy below slowed (the M4's blend workload
+            // 5,044 -> 5,107 ticks, measured).
             if LAZY {
                 t.p = t.planes::<F>(v, BLEND);
             }

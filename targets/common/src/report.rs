@@ -241,9 +241,11 @@ fn bench_one<C: TileConfig>(
 /// micro:bit (feature `bench_extra`, a build of its own there: each tile
 /// configuration is a copy of the draw code): area sampling (seed 001
 /// §IV.5: the small triangles with every edge flagged,
-/// [`workloads::AreaAaBench`]) and the quadratic texture mode's tolerance
-/// knob, within two texels and never split (the seed's plain 32-pixel
-/// segments), on the textured walls.
+/// [`workloads::AreaAaBench`]); the textured walls in perspective, affine,
+/// quadratic and exact (moved here when the Gouraud draw's second copy of
+/// its row loop filled the other build's flash); and the quadratic
+/// texture mode's tolerance knob, within two texels and never split (the
+/// seed's plain 32-pixel segments).
 pub fn report_extra_benches(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt::Result {
     bench_one::<workloads::AreaAaBench>(
         "gouraud_z_area_aa_rgb565",
@@ -253,6 +255,27 @@ pub fn report_extra_benches(out: &mut impl Write, clock: &mut impl Clock) -> cor
         clock,
     )?;
     let tex: &[Command] = &LARGE_TEX_CMDS;
+    bench_one::<workloads::TexBench<AffineTexturing>>(
+        "large_tex_affine_z_rgb565",
+        tex,
+        Via::Textured,
+        out,
+        clock,
+    )?;
+    bench_one::<workloads::TexBench<QuadraticTexturing>>(
+        "large_tex_quadratic_z_rgb565",
+        tex,
+        Via::Textured,
+        out,
+        clock,
+    )?;
+    bench_one::<workloads::TexBench<ExactTexturing>>(
+        "large_tex_exact_z_rgb565",
+        tex,
+        Via::Textured,
+        out,
+        clock,
+    )?;
     bench_one::<workloads::TexBench<QuadraticTexturing<16>>>(
         "large_tex_quadratic_2texel_z_rgb565",
         tex,
@@ -272,9 +295,8 @@ pub fn report_extra_benches(out: &mut impl Write, clock: &mut impl Clock) -> cor
 /// Prints `bench NAME ticks T` for each workload: flat fill; Gouraud
 /// alone, with Z, with Z and window ID, and with those and 8x8 dither (all
 /// RGB565); large Gouraud triangles alone, with Z, and with Z, window ID
-/// and dither; the same translucent (alpha-blended, with Z); textured in
-/// perspective, affine, quadratic and exact; and with Z
-/// and every edge antialiased (seed 003's edges, and area sampling through
+/// and dither; the same translucent (alpha-blended, with Z) and fast
+/// Phong; and with Z and every edge antialiased (seed 003's edges, and area sampling through
 /// the α-channel); the same triangles through `embedded-graphics`' `Triangle`
 /// fill; lines, Bresenham and two-point (Wu) antialiased, and the same
 /// lines through `embedded-graphics`' `Line`.
@@ -337,28 +359,6 @@ pub fn report_benches(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt
         "large_phong_z_rgb565",
         &LARGE_QUAD_CMDS,
         Via::Ours,
-        out,
-        clock,
-    )?;
-    let tex: &[Command] = &LARGE_TEX_CMDS;
-    bench_one::<workloads::TexBench<AffineTexturing>>(
-        "large_tex_affine_z_rgb565",
-        tex,
-        Via::Textured,
-        out,
-        clock,
-    )?;
-    bench_one::<workloads::TexBench<QuadraticTexturing>>(
-        "large_tex_quadratic_z_rgb565",
-        tex,
-        Via::Textured,
-        out,
-        clock,
-    )?;
-    bench_one::<workloads::TexBench<ExactTexturing>>(
-        "large_tex_exact_z_rgb565",
-        tex,
-        Via::Textured,
         out,
         clock,
     )?;
