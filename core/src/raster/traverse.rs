@@ -221,23 +221,27 @@ mod tests {
         }
     }
 
-    /// Every row the floor walks give is exactly the run of pixels whose centres
-    /// pass all three edge tests, against a per-pixel evaluation over the
-    /// whole box: thin, steep, flat-topped and flat-bottomed triangles,
-    /// clips on every side.
+    /// A linear congruential generator of integers in `lo..hi`.
+    fn lcg(mut seed: u64) -> impl FnMut(i64, i64) -> i64 {
+        move |lo, hi| {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            lo + ((seed >> 33) as i64 % (hi - lo))
+        }
+    }
+
+    /// Every row the floor walks give is exactly the run of pixels whose
+    /// centres pass all three edge tests, against a per-pixel evaluation
+    /// over the whole box: thin, steep, flat-topped and flat-bottomed
+    /// triangles, clips on every side.
     #[test]
     fn rows_are_the_pixels_inside_every_edge() {
         use crate::format::{Rgb, Rgb565Format};
         use crate::geom::Vertex;
         use crate::numeric::Coord;
         use crate::setup::{fits_i32, TriangleSetup};
-        let mut seed = 0x0dd_ba11_5eed_u64;
-        let mut rnd = |lo: i64, hi: i64| {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            lo + ((seed >> 33) as i64 % (hi - lo))
-        };
+        let mut rnd = lcg(0x0dd_ba11_5eed);
         let (mut rows, mut flat) = (0, 0);
         for k in 0..10000 {
             let r = [24, 96, 600][rnd(0, 3) as usize];
@@ -303,13 +307,7 @@ mod tests {
         use crate::geom::Vertex;
         use crate::numeric::Coord;
         use crate::setup::{fits_i32, TriangleSetup};
-        let mut seed = 0x1234_5678_9abc_def0u64;
-        let mut rnd = |lo: i64, hi: i64| {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            lo + ((seed >> 33) as i64 % (hi - lo))
-        };
+        let mut rnd = lcg(0x1234_5678_9abc_def0);
         let mut checked = 0;
         for _ in 0..3000 {
             let (cx, cy) = (rnd(-2000, 6000), rnd(-2000, 6000));
