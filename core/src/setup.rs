@@ -151,8 +151,9 @@ pub(crate) struct EdgeAt<T> {
 ///
 /// **Small triangles** (`T = i32`, box under 1024 px a side: every triangle
 /// of a small display) carry each attribute as a plane anchored at the
-/// top-left pixel of their box: its value there (`c`, `z`) and its steps per
-/// pixel in x (`gc`, `gz`) and per row in y (`gcy`, `gzy`). The value at
+/// top-left pixel of their box ([`Attrs`], in `p`): its value there (`c`,
+/// `z`) and its steps per pixel in x (`gc`, `gz`) and per row in y (`gcy`,
+/// `gzy`). The value at
 /// pixel `(ax + i, ay + j)` is `c + i gc + j gcy`, in `i32` arithmetic
 /// modulo 2^32: no division and no 64-bit product per row, and the same
 /// value whichever tile asks, so tiling cannot change the output. The
