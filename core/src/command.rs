@@ -60,6 +60,55 @@ impl Blend {
     }
 }
 
+/// Which triangles a draw drops by their winding: the geometry stage's
+/// option ([`DrawOptions::cull`](crate::geometry::DrawOptions::cull), fronts
+/// by their winding in model space) and a frame's
+/// ([`Frame::cull`](crate::frame::Frame::cull), fronts by their winding on
+/// screen: for meshes projected offline, a raster-only list).
+///
+/// On screen a *front* face is one whose vertices run counter-clockwise as
+/// seen on the display: a negative doubled area `(x1 - x0)(y2 - y0) -
+/// (y1 - y0)(x2 - x0)` in the y-down screen coordinates. That is how an
+/// OBJ model's outside faces (counter-clockwise seen from outside) reach
+/// the screen through a projection. A triangle of zero area draws nothing
+/// either way.
+///
+/// ```
+/// use tilerast::prelude::*;
+/// let v = |x: i32, y: i32| Vertex::new(Coord::from_num(x), Coord::from_num(y), 9, Rgb::new(255, 0, 0));
+/// // Clockwise as seen on the display: a back face.
+/// let back = Command::triangle([v(0, 0), v(8, 0), v(0, 8)]);
+/// assert!(back.culled_by(Cull::Back) && !back.culled_by(Cull::Front));
+/// let front = Command::triangle([v(0, 0), v(0, 8), v(8, 0)]);
+/// assert!(!front.culled_by(Cull::Back) && front.culled_by(Cull::Front));
+/// assert!(!front.culled_by(Cull::None));
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u8)]
+pub enum Cull {
+    /// Draw both sides.
+    None = 0,
+    /// Drop triangles seen from behind (the geometry stage's default).
+    #[default]
+    Back = 1,
+    /// Drop triangles seen from the front.
+    Front = 2,
+}
+
+impl Cull {
+    /// Whether a triangle of doubled signed area `area2` (y-down screen
+    /// coordinates, negative for a front face) is dropped.
+    #[inline(always)]
+    pub const fn drops(self, area2: i64) -> bool {
+        match self {
+            Cull::None => false,
+            Cull::Back => area2 > 0,
+            Cull::Front => area2 < 0,
+        }
+    }
+}
+
 /// Per-command state (the seed's window ID and plane mask, the RUF seed's
 /// object tag and the RE's blend mode): 8 bytes.
 ///
@@ -427,6 +476,24 @@ impl Command {
         self
     }
 
+    /// Whether `cull` drops the command: a triangle (Gouraud, quadratic or
+    /// textured) whose winding on screen it culls ([`Cull`]). A frame that
+    /// culls ([`Frame::cull`](crate::frame::Frame::cull)) bins no such
+    /// triangle.
+    #[inline]
+    pub fn culled_by(&self, cull: Cull) -> bool {
+        let p = match self {
+            Command::Triangle { v, .. } => v.map(|v| (v.x, v.y)),
+            Command::Quadratic { v, .. } => v.map(|v| (v.x, v.y)),
+            Command::Textured { v, .. } => v.map(|v| (v.x, v.y)),
+            _ => return false,
+        };
+        cull != Cull::None && {
+            let q = p.map(|(x, y)| (x.to_bits(), y.to_bits()));
+            cull.drops(area2_i32(q[0], q[1], q[2]))
+        }
+    }
+
     /// The command's state (window ID, plane mask, object tag); `None` for
     /// [`Command::WidFill`], which has none.
     ///
@@ -528,6 +595,17 @@ impl Command {
             | Command::WidFill { rect, .. } => (rect.w > 0 && rect.h > 0).then_some(*rect),
         }
     }
+}
+
+/// The doubled signed area of the triangle `p0 p1 p2` (sub-pixels, y
+/// down): `(x1 - x0)(y2 - y0) - (y1 - y0)(x2 - x0)` in 64 bits (validated
+/// coordinates differ by less than 2^18: products below 2^36; others
+/// wrap, harmlessly).
+#[inline(always)]
+pub(crate) fn area2_i32(p0: (i32, i32), p1: (i32, i32), p2: (i32, i32)) -> i64 {
+    let d = |a: i32, b: i32| a.wrapping_sub(b);
+    crate::numeric::wide_mul_i(d(p1.0, p0.0), d(p2.1, p0.1))
+        - crate::numeric::wide_mul_i(d(p1.1, p0.1), d(p2.0, p0.0))
 }
 
 /// `defmt` formats for the types that hold `fixed` numbers (which have none

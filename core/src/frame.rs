@@ -4,7 +4,7 @@
 //! byte-identical to rendering the frame as one big tile.
 
 use crate::bin::{Bins, Grid};
-use crate::command::Command;
+use crate::command::{Command, Cull};
 use crate::config::TileConfig;
 use crate::error::{Error, FlushError};
 use crate::format::PixelFormat;
@@ -68,15 +68,17 @@ pub trait CommandSource {
     /// [`Self::each_keyed`] does. `bounds` is [`Command::bounds`], or
     /// [`Command::coverage_bounds`] for every triangle when `cells` (coverage
     /// antialiasing) and for an edge-flagged one when `area` (area
-    /// sampling). The default decodes each command; a source that can find
-    /// bounds cheaper overrides it — an [encoded](crate::wire::Encoded)
-    /// mesh reads only its vertices' positions.
+    /// sampling); `None` for a triangle `cull` drops
+    /// ([`Command::culled_by`]). The default decodes each command; a
+    /// source that can find bounds cheaper overrides it — an
+    /// [encoded](crate::wire::Encoded) mesh reads only its vertices'
+    /// positions.
     ///
     /// ```
     /// use tilerast::prelude::*;
     /// let list = [Command::fill(Rect::new(2, 3, 4, 5), Rgb::new(1, 2, 3))];
     /// let mut seen = vec![];
-    /// list[..].each_bounds(false, false, |key, b| seen.push((key, b)))?;
+    /// list[..].each_bounds(false, false, Cull::None, |key, b| seen.push((key, b)))?;
     /// assert_eq!(seen, [(0, Some(Rect::new(2, 3, 4, 5)))]);
     /// # Ok::<(), Error>(())
     /// ```
@@ -84,9 +86,10 @@ pub trait CommandSource {
         &self,
         cells: bool,
         area: bool,
+        cull: Cull,
         mut f: impl FnMut(u32, Option<Rect>),
     ) -> Result<(), Error> {
-        self.each_keyed(|k, c| f(k, bin_bounds(c, cells, area)))
+        self.each_keyed(|k, c| f(k, bin_bounds(c, cells, area, cull)))
     }
     /// [`Self::each_bounds`] for a band of tiles: a command whose pixels
     /// miss the pixel rows `rows` may be reported with `None` bounds, if
@@ -97,7 +100,7 @@ pub trait CommandSource {
     /// use tilerast::prelude::*;
     /// let list = [Command::fill(Rect::new(2, 3, 4, 5), Rgb::new(1, 2, 3))];
     /// let mut seen = vec![];
-    /// list[..].each_bounds_in(false, false, 0..3, |key, b| seen.push((key, b)))?;
+    /// list[..].each_bounds_in(false, false, Cull::None, 0..3, |key, b| seen.push((key, b)))?;
     /// // A slice reports every command's bounds.
     /// assert_eq!(seen, [(0, Some(Rect::new(2, 3, 4, 5)))]);
     /// # Ok::<(), Error>(())
@@ -106,20 +109,23 @@ pub trait CommandSource {
         &self,
         cells: bool,
         area: bool,
+        cull: Cull,
         rows: core::ops::Range<i32>,
         f: impl FnMut(u32, Option<Rect>),
     ) -> Result<(), Error> {
         let _ = rows;
-        self.each_bounds(cells, area, f)
+        self.each_bounds(cells, area, cull, f)
     }
 }
 
 /// The pixels `cmd` can touch in tiles with coverage antialiasing
-/// (`cells`) or area sampling (`area`), or neither
-/// ([`CommandSource::each_bounds`]).
+/// (`cells`) or area sampling (`area`), or neither, in a frame that culls
+/// `cull` ([`CommandSource::each_bounds`]).
 #[inline(always)]
-pub(crate) fn bin_bounds(cmd: &Command, cells: bool, area: bool) -> Option<Rect> {
-    if cells || area && cmd.edge_flagged() {
+pub(crate) fn bin_bounds(cmd: &Command, cells: bool, area: bool, cull: Cull) -> Option<Rect> {
+    if cull != Cull::None && cmd.culled_by(cull) {
+        None
+    } else if cells || area && cmd.edge_flagged() {
         cmd.coverage_bounds()
     } else {
         cmd.bounds()
@@ -169,6 +175,14 @@ pub struct Frame {
     tile_h: u16,
     /// Values each tile is cleared to.
     pub clear: Clear,
+    /// Triangles the frame drops by their winding on screen ([`Cull`];
+    /// default [`Cull::None`]): binning reads each triangle's positions and
+    /// drops those facing away, so they cost no setup, traversal or
+    /// fragment in any tile — a closed mesh projected offline draws about
+    /// half its triangles. For lists whose every triangle is a face of a
+    /// mesh; the geometry stage culls its own draws
+    /// ([`DrawOptions::cull`](crate::geometry::DrawOptions::cull)).
+    pub cull: Cull,
 }
 
 impl Frame {
@@ -183,6 +197,7 @@ impl Frame {
                 tile_w,
                 tile_h,
                 clear: Clear::default(),
+                cull: Cull::None,
             })
         } else {
             Err(Error::BadSize)
@@ -354,7 +369,8 @@ impl Frame {
         let mut stats = FrameStats::default();
         let aa = <C::Aa as AaMode>::SAMPLES > 0;
         let area = <C::Aa as AaMode>::AREA;
-        let bounds = |cmd: &Command| bin_bounds(cmd, aa, area);
+        let cull = self.cull;
+        let bounds = |cmd: &Command| bin_bounds(cmd, aa, area, cull);
         let enabled = Bins::<CAP, TB>::enabled();
         if !enabled {
             cmds.validate()?;
@@ -382,6 +398,7 @@ impl Frame {
                 // bands, and most commands miss most of them).
                 let band_rows = (t0 / g.cols, (t1 - 1) / g.cols);
                 let pass = BinPass {
+                    cull: self.cull,
                     cells: aa,
                     area,
                     spans: g.spans(),
@@ -480,6 +497,7 @@ impl Frame {
 struct BinPass {
     cells: bool,
     area: bool,
+    cull: Cull,
     spans: crate::bin::GridSpans,
     cols: u32,
     th: u32,
@@ -500,7 +518,7 @@ impl BinPass {
         let (band_y0, band_y1) = self.band_rows;
         let (t0, t1) = self.tiles;
         let rows = (band_y0 * self.th) as i32..((band_y1 + 1) * self.th) as i32;
-        cmds.each_bounds_in(self.cells, self.area, rows, |key, b| {
+        cmds.each_bounds_in(self.cells, self.area, self.cull, rows, |key, b| {
             let Some((x0, x1, y0, y1)) = b.and_then(|b| self.spans.span(&b)) else {
                 return;
             };

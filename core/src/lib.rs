@@ -112,7 +112,7 @@ pub use fixed;
 pub mod prelude {
     pub use crate::area::AreaAa;
     pub use crate::bin::Bins;
-    pub use crate::command::{Blend, Command, QuadVertex, SpanCmd, State, Vertex};
+    pub use crate::command::{Blend, Command, Cull, QuadVertex, SpanCmd, State, Vertex};
     pub use crate::config::{groups, Planes, Ssd1306Config, St7789Config, TileConfig};
     pub use crate::coverage::NoAa;
     pub use crate::error::{Error, FlushError};

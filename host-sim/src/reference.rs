@@ -139,6 +139,10 @@ fn render_full(
     };
     let screen = Rect::new(0, 0, w, h);
     for (k, cmd) in cmds.iter().enumerate() {
+        // A triangle the frame culls draws nothing (`Frame::cull`).
+        if cmd.culled_by(cfg.cull) {
+            continue;
+        }
         let shade_at = |w: [f64; 3], own: [f64; 3]| shader(k, w).unwrap_or(own);
         match cmd {
             Command::WidFill { rect, wid } => {
@@ -622,7 +626,7 @@ pub fn supersample_within(cfg: &Config, cmds: &[Command], n: u32, budget: u64) -
             // Every command clips itself to the block's samples (the
             // pipeline's bounds are pixel-centre bounds; the ideal reaches
             // past them).
-            for cmd in cmds {
+            for cmd in cmds.iter().filter(|c| !c.culled_by(cfg.cull)) {
                 s.draw(cfg, cmd);
             }
             for py in 0..bh {

@@ -64,6 +64,8 @@ pub struct Config {
     pub clear: Clear,
     /// Coverage antialiasing.
     pub aa: AaKind,
+    /// Back-face culling of the whole frame ([`Frame::cull`]).
+    pub cull: Cull,
 }
 
 impl Config {
@@ -120,6 +122,7 @@ impl Config {
             wid: plane(h.wid_bits, 8, "window-ID")?,
             clear: h.clear,
             aa: AaKind::None,
+            cull: h.cull,
         })
     }
 }
@@ -399,6 +402,7 @@ pub(crate) fn frame_and_tile<C: TileConfig, const G: usize>(
     }
     let mut frame = Frame::new(cfg.width, cfg.height, tw, th)?;
     frame.clear = cfg.clear;
+    frame.cull = cfg.cull;
     Ok((frame, Box::default()))
 }
 

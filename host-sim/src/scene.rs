@@ -138,6 +138,30 @@ struct ScreenSpec {
     aa: crate::render::AaKind,
     #[serde(default = "quadratic")]
     texturing: crate::render::TexKind,
+    /// `"back"` or `"front"`: the frame drops the triangles facing that
+    /// way on screen while binning (`Frame::cull`); default `"none"`.
+    #[serde(default)]
+    cull: CullKind,
+}
+
+/// A scene's `cull` ([`Cull`]).
+#[derive(Debug, Clone, Copy, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+enum CullKind {
+    #[default]
+    None,
+    Back,
+    Front,
+}
+
+impl From<CullKind> for Cull {
+    fn from(k: CullKind) -> Cull {
+        match k {
+            CullKind::None => Cull::None,
+            CullKind::Back => Cull::Back,
+            CullKind::Front => Cull::Front,
+        }
+    }
 }
 
 fn quadratic() -> crate::render::TexKind {
@@ -560,6 +584,7 @@ impl Scene {
                 ..Clear::default()
             },
             aa: s.aa,
+            cull: s.cull.into(),
         };
         let mut commands = Vec::new();
         let mut meshes = Vec::new();
@@ -973,6 +998,7 @@ impl Scene {
             depth_bits: if c.depth { 16 } else { 0 },
             wid_bits: if c.wid { 8 } else { 0 },
             clear: c.clear,
+            cull: c.cull,
         }
     }
 

@@ -52,6 +52,7 @@ fn config(w: u16, h: u16) -> Config {
         wid: false,
         clear: Clear::default(),
         aa: tilerast_sim::render::AaKind::None,
+        cull: tilerast::command::Cull::None,
     }
 }
 

@@ -142,6 +142,7 @@ fn config() -> Config {
         wid: false,
         clear: Clear::default(),
         aa: AaKind::None,
+        cull: tilerast::command::Cull::None,
     }
 }
 

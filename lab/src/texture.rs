@@ -72,6 +72,7 @@ fn config() -> Config {
         wid: false,
         clear: Clear::default(),
         aa: tilerast_sim::AaKind::None,
+        cull: tilerast::command::Cull::None,
     }
 }
 

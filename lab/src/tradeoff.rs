@@ -284,6 +284,7 @@ fn cfg(w: u16, h: u16, depth: bool) -> Config {
             ..Clear::default()
         },
         aa: AaKind::None,
+        cull: tilerast::command::Cull::None,
     }
 }
 

@@ -87,6 +87,7 @@ fn config(side: u16) -> Config {
         wid: false,
         clear: Clear::default(),
         aa: tilerast_sim::AaKind::None,
+        cull: tilerast::command::Cull::None,
     }
 }
 

@@ -54,6 +54,7 @@ pub fn config(w: u16, h: u16, format: FormatKind) -> Config {
         wid: false,
         clear: Clear::default(),
         aa: tilerast_sim::AaKind::None,
+        cull: Cull::None,
     }
 }
 

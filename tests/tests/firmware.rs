@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command as Process;
 use tilerast::prelude::{AffineTexturing, ExactTexturing, QuadraticTexturing};
 use tilerast::texture::NEVER_SPLIT;
-use tilerast_fw::report::{scene_crc, Demo, SceneKind, Ssd1306, Teapot};
+use tilerast_fw::report::{scene_crc, Demo, SceneKind, Ssd1306, Teapot, TeapotCull};
 use tilerast_fw::workloads::{self, FILL_CMDS, LARGE_TRIANGLE_CMDS, LINE_CMDS, TRIANGLE_CMDS};
 use tilerast_sim::Scene;
 use tilerast_tests::{repo, scene};
@@ -235,7 +235,7 @@ fn parse(out: &str) -> Report {
 fn export_scenes() -> PathBuf {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("scenes");
     std::fs::create_dir_all(&dir).unwrap();
-    for name in [Demo::NAME, Teapot::NAME, Ssd1306::NAME] {
+    for name in [Demo::NAME, Teapot::NAME, TeapotCull::NAME, Ssd1306::NAME] {
         let s = Scene::load(scene(&format!("{name}.toml"))).unwrap();
         std::fs::write(dir.join(format!("{name}.bin")), s.encode().unwrap()).unwrap();
     }
@@ -444,6 +444,11 @@ fn host_crc(name: &str, bytes: &[u8], tile: (u16, u16)) -> u32 {
                 .unwrap()
                 .0
         }
+        "teapot_cull" => {
+            scene_crc::<TeapotCull, 2048, 0, 0>(bytes, tile, &mut clock)
+                .unwrap()
+                .0
+        }
         "ssd1306" => {
             scene_crc::<Ssd1306, 2048, 0, 0>(bytes, tile, &mut clock)
                 .unwrap()
@@ -470,8 +475,8 @@ fn firmware_output_is_bit_identical_to_the_host() {
         let elf = build(board, &scenes, None);
         let out = run(board, &elf);
         let mut r = parse(&out);
-        // The teapot's flash image fits only the MPS2's 4 MB.
-        let expect = if board == "microbit" { 2 } else { 3 };
+        // The teapots' flash images fit only the MPS2's 4 MB.
+        let expect = if board == "microbit" { 2 } else { 4 };
         assert_eq!(r.scenes.len(), expect, "{out}");
         for (name, SceneLine { tile, crc, .. }) in &r.scenes {
             let bytes = std::fs::read(scenes.join(format!("{name}.bin"))).unwrap();

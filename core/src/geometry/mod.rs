@@ -149,18 +149,7 @@ impl<S: Real> Lighting<S> {
     }
 }
 
-/// Which triangles a draw culls, by their winding on screen.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Cull {
-    /// Draw both sides.
-    None,
-    /// Drop triangles seen from behind (the default).
-    #[default]
-    Back,
-    /// Drop triangles seen from the front.
-    Front,
-}
+pub use crate::command::Cull;
 
 /// How a draw's lit triangles are shaded between their vertices.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

@@ -60,6 +60,8 @@ fn stack_used() -> usize {
 static DEMO: &[u8] = include_bytes!(concat!(env!("TILERAST_SCENES"), "/demo.bin"));
 #[cfg(feature = "teapot")]
 static TEAPOT: &[u8] = include_bytes!(concat!(env!("TILERAST_SCENES"), "/teapot.bin"));
+#[cfg(feature = "teapot")]
+static TEAPOT_CULL: &[u8] = include_bytes!(concat!(env!("TILERAST_SCENES"), "/teapot_cull.bin"));
 #[cfg(feature = "spin_teapot")]
 static TEAPOT_MESH: &[u8] = include_bytes!(concat!(env!("TILERAST_SCENES"), "/teapot.mesh"));
 #[cfg(feature = "ssd1306")]
@@ -114,6 +116,20 @@ pub fn run<const ND: usize, const NS: usize, const BC: usize, const BT: usize>(
         #[cfg(feature = "teapot")]
         crate::report::report_phases::<crate::report::Teapot, ND, BC, BT>(
             TEAPOT, demo_tile, &mut out, &mut clock,
+        )?;
+        #[cfg(feature = "teapot")]
+        crate::report::report_scene::<crate::report::TeapotCull, ND, BC, BT>(
+            TEAPOT_CULL,
+            demo_tile,
+            &mut out,
+            &mut clock,
+        )?;
+        #[cfg(feature = "teapot")]
+        crate::report::report_phases::<crate::report::TeapotCull, ND, BC, BT>(
+            TEAPOT_CULL,
+            demo_tile,
+            &mut out,
+            &mut clock,
         )?;
         #[cfg(feature = "ssd1306")]
         crate::report::report_scene::<crate::report::Ssd1306, NS, BC, BT>(

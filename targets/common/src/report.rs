@@ -40,6 +40,16 @@ impl SceneKind for Teapot {
     const LABEL: Option<&'static str> = None;
 }
 
+/// `scenes/teapot_cull.toml`: the [`Teapot`] frame with back-face culling
+/// in the raster stage (`State::cull`): the binning drops the triangles
+/// facing away.
+pub struct TeapotCull;
+impl SceneKind for TeapotCull {
+    type C = Planes<Rgb565Format, Depth16, NoWid, NoDither>;
+    const NAME: &'static str = "teapot_cull";
+    const LABEL: Option<&'static str> = None;
+}
+
 /// `scenes/ssd1306.toml`: 1 bit per pixel, Z, 4x4 dither.
 pub struct Ssd1306;
 impl SceneKind for Ssd1306 {
