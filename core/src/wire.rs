@@ -669,11 +669,7 @@ impl MeshCursor<'_> {
         if cull != Cull::None {
             return self.culling_bounds(at, cells, rows, cull);
         }
-        if self.alpha {
-            self.bounds_of::<{ MESH_VERTEX + 1 }, false>(at, cells, rows, cull)
-        } else {
-            self.bounds_of::<MESH_VERTEX, false>(at, cells, rows, cull)
-        }
+        self.bounds_by::<false>(at, cells, rows, cull)
     }
 
     /// [`Self::bounds`] in a frame that culls: `None` for a triangle
@@ -689,10 +685,23 @@ impl MeshCursor<'_> {
         rows: &Range<i32>,
         cull: Cull,
     ) -> Result<Option<Rect>, Error> {
+        self.bounds_by::<true>(at, cells, rows, cull)
+    }
+
+    /// [`Self::bounds_of`] for the record's vertex size, culling when
+    /// `CULL`.
+    #[inline(always)]
+    fn bounds_by<const CULL: bool>(
+        &self,
+        at: usize,
+        cells: bool,
+        rows: &Range<i32>,
+        cull: Cull,
+    ) -> Result<Option<Rect>, Error> {
         if self.alpha {
-            self.bounds_of::<{ MESH_VERTEX + 1 }, true>(at, cells, rows, cull)
+            self.bounds_of::<{ MESH_VERTEX + 1 }, CULL>(at, cells, rows, cull)
         } else {
-            self.bounds_of::<MESH_VERTEX, true>(at, cells, rows, cull)
+            self.bounds_of::<MESH_VERTEX, CULL>(at, cells, rows, cull)
         }
     }
 

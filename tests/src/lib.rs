@@ -300,3 +300,32 @@ pub fn front_camera(scene: &mut tilerast::geometry::Scene<'_, f32>) {
         .set_viewport(tilerast::prelude::Rect::new(0, 0, 64, 64))
         .unwrap();
 }
+
+/// A frame's packed pixels, row-major, rendered in tiles of `N` pixels of
+/// configuration `C` through bins of `CAP` entries and `TB` tiles (0: no
+/// bins, every tile walks the list), and its counts.
+pub fn frame_raw<const N: usize, C, S, const CAP: usize, const TB: usize>(
+    frame: &Frame,
+    cmds: &S,
+) -> (Vec<u32>, tilerast::frame::FrameStats)
+where
+    C: tilerast::config::TileConfig,
+    S: tilerast::frame::CommandSource + ?Sized,
+{
+    let mut tile: Box<Tile<N, C>> = Box::default();
+    let mut bins: Box<tilerast::bin::Bins<CAP, TB>> = Box::default();
+    let s = frame.screen();
+    let mut out = vec![0u32; s.area() as usize];
+    let stats = frame
+        .render_binned(&mut tile, &mut *bins, cmds, |t| {
+            let a = t.area();
+            for y in a.y..a.y + a.h as i32 {
+                for x in a.x..a.x + a.w as i32 {
+                    out[(y as u32 * s.w + x as u32) as usize] = t.raw(x, y).unwrap();
+                }
+            }
+            Ok::<(), ()>(())
+        })
+        .unwrap();
+    (out, stats)
+}

@@ -6,40 +6,12 @@
 //! inside shows through its open rim and spout.
 
 use proptest::prelude::*;
-use tilerast::bin::Bins;
-use tilerast::frame::{CommandSource, FrameStats};
 use tilerast::prelude::*;
 use tilerast::wire::SceneHeader;
 use tilerast_sim::{reference, render, FormatKind, Scene};
-use tilerast_tests::{config, random_command, scene, Rng};
+use tilerast_tests::{config, frame_raw, random_command, scene, Rng};
 
 type C = Planes<Rgb565Format, Depth16, NoWid, NoDither>;
-
-/// The frame's pixels through bins of `CAP` entries (0: unbinned).
-fn frame_raw<S, const CAP: usize, const TB: usize>(
-    frame: &Frame,
-    cmds: &S,
-) -> (Vec<u32>, FrameStats)
-where
-    S: CommandSource + ?Sized,
-{
-    let mut tile: Box<Tile<2048, C>> = Box::default();
-    let mut bins: Box<Bins<CAP, TB>> = Box::default();
-    let s = frame.screen();
-    let mut out = vec![0u32; s.area() as usize];
-    let stats = frame
-        .render_binned(&mut tile, &mut *bins, cmds, |t| {
-            let a = t.area();
-            for y in a.y..a.y + a.h as i32 {
-                for x in a.x..a.x + a.w as i32 {
-                    out[(y as u32 * s.w + x as u32) as usize] = t.raw(x, y).unwrap();
-                }
-            }
-            Ok::<(), ()>(())
-        })
-        .unwrap();
-    (out, stats)
-}
 
 /// The list without the triangles `cull` drops.
 fn kept(cmds: &[Command], cull: Cull) -> Vec<Command> {
@@ -94,11 +66,11 @@ proptest! {
         let rest = kept(&cmds, cull);
         let (tw, th) = [(100, 80), (32, 16), (7, 5)][tile];
         let mut frame = Frame::new(100, 80, tw, th).unwrap();
-        let (want, plain) = frame_raw::<_, 4096, 256>(&frame, &rest[..]);
+        let (want, plain) = frame_raw::<2048, C, _, 4096, 256>(&frame, &rest[..]);
         frame.cull = cull;
-        let (a, sa) = frame_raw::<_, 4096, 256>(&frame, &cmds[..]);
-        let (b, _) = frame_raw::<_, 7, 3>(&frame, &cmds[..]);
-        let (c, _) = frame_raw::<_, 0, 0>(&frame, &cmds[..]);
+        let (a, sa) = frame_raw::<2048, C, _, 4096, 256>(&frame, &cmds[..]);
+        let (b, _) = frame_raw::<2048, C, _, 7, 3>(&frame, &cmds[..]);
+        let (c, _) = frame_raw::<2048, C, _, 0, 0>(&frame, &cmds[..]);
         prop_assert_eq!(&a, &want);
         prop_assert_eq!(&b, &want);
         prop_assert_eq!(&c, &want);
@@ -127,10 +99,11 @@ fn an_encoded_teapot_culls_as_its_list() {
         let (h, cmds) = SceneHeader::parse(&bytes).unwrap();
         assert_eq!(h.cull, cull);
         let frame = h.frame((64, 32)).unwrap();
-        let (flash, stats) = frame_raw::<_, 8192, 32>(&frame, &cmds);
+        let (flash, stats) = frame_raw::<2048, C, _, 8192, 32>(&frame, &cmds);
         let mut plain = Frame::new(240, 240, 64, 32).unwrap();
         plain.clear = h.clear;
-        let (list, want) = frame_raw::<_, 8192, 32>(&plain, &kept(&two.commands, cull)[..]);
+        let (list, want) =
+            frame_raw::<2048, C, _, 8192, 32>(&plain, &kept(&two.commands, cull)[..]);
         assert_eq!(flash, list, "{cull:?}");
         assert_eq!(stats.replayed, want.replayed, "{cull:?}");
     }

@@ -8,35 +8,9 @@ use proptest::prelude::*;
 use tilerast::prelude::*;
 use tilerast::wire::SceneHeader;
 use tilerast_sim::Scene;
-use tilerast_tests::{random_command, scene, Rng};
+use tilerast_tests::{frame_raw, random_command, scene, Rng};
 
 type DemoTile = Tile<{ groups(64, 32) }, Planes<Rgb444Format, Depth16, Wid8, Bayer8>>;
-
-/// The frame's packed pixels, row-major, and what rendering did.
-fn frame_raw<const N: usize, C: TileConfig, S, const CAP: usize, const TB: usize>(
-    frame: &Frame,
-    cmds: &S,
-) -> (Vec<u32>, FrameStats)
-where
-    S: CommandSource + ?Sized,
-{
-    let mut tile: Box<Tile<N, C>> = Box::default();
-    let mut bins: Box<Bins<CAP, TB>> = Box::default();
-    let s = frame.screen();
-    let mut out = vec![0u32; s.area() as usize];
-    let stats = frame
-        .render_binned(&mut tile, &mut *bins, cmds, |t| {
-            let a = t.area();
-            for y in a.y..a.y + a.h as i32 {
-                for x in a.x..a.x + a.w as i32 {
-                    out[(y as u32 * s.w + x as u32) as usize] = t.raw(x, y).unwrap();
-                }
-            }
-            Ok::<(), ()>(())
-        })
-        .unwrap();
-    (out, stats)
-}
 
 #[test]
 fn the_demo_from_flash_is_the_same_through_any_bins() {
