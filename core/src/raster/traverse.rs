@@ -40,21 +40,46 @@ impl<T: EdgeInt> FloorWalk<T> {
     pub(crate) fn next(&mut self) {
         self.q += self.sq;
         self.r += self.sr;
-        if self.r >= self.den {
-            self.r = self.r - self.den;
-            self.q += T::ONE;
+        if cfg!(target_arch = "arm") {
+            if self.r >= self.den {
+                self.r = self.r - self.den;
+                self.q += T::ONE;
+            }
+        } else {
+            // Selects, not a branch: the carry follows the edge's slope,
+            // a pattern a host's branch predictor misses (host, 1,077-px
+            // flat triangles: 0.377 -> 0.357 ns/px, measured). The
+            // microcontrollers predict no branch; a skipped branch is
+            // cheaper there than conditional instructions.
+            let carry = self.r >= self.den;
+            self.r = self.r - if carry { self.den } else { T::ZERO };
+            self.q += if carry { T::ONE } else { T::ZERO };
         }
     }
 }
 
-#[derive(Debug, Clone, Copy)]
-enum EdgeRows<T> {
+/// Which side of an edge's walk a row's pixels must lie on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Side {
     /// Left bound: `px >= -q`.
-    Lower(FloorWalk<T>),
+    Lower,
     /// Right bound: `px <= q`.
-    Upper(FloorWalk<T>),
-    /// Horizontal edge: the row is inside iff `num >= 0`.
-    Flat { num: T, step: T },
+    Upper,
+    /// Horizontal edge: the row is inside iff `q >= 0` (the edge's value
+    /// itself, walked with `den = 1`).
+    Flat,
+}
+
+/// One edge's bound on each row: a walk every kind of edge steps alike
+/// (no dispatch per row; a horizontal edge's walk adds its step and never
+/// carries), read by its side. With an enum of walks, dispatched in each
+/// row's step, the host's large flat triangles took 1.12 ns/px against
+/// 0.36 (its walks lived on the stack); the Cortex-M4 demo frame 270,878
+/// -> 266,668 ticks, the micro:bit's 526,995 -> 525,142 (measured).
+#[derive(Debug, Clone, Copy)]
+struct EdgeRows<T> {
+    side: Side,
+    w: FloorWalk<T>,
 }
 
 impl<T: EdgeInt> EdgeRows<T> {
@@ -64,21 +89,36 @@ impl<T: EdgeInt> EdgeRows<T> {
     fn new(e: &EdgeAt<T>, dy0: T) -> Self {
         let num = e.b + e.step * dy0 - e.bias;
         if e.a > T::ZERO {
-            EdgeRows::Lower(FloorWalk::new(num, e.a, e.step))
+            EdgeRows {
+                side: Side::Lower,
+                w: FloorWalk::new(num, e.a, e.step),
+            }
         } else if e.a < T::ZERO {
-            EdgeRows::Upper(FloorWalk::new(num, -e.a, e.step))
+            EdgeRows {
+                side: Side::Upper,
+                w: FloorWalk::new(num, -e.a, e.step),
+            }
         } else {
-            EdgeRows::Flat { num, step: e.step }
+            EdgeRows {
+                side: Side::Flat,
+                w: FloorWalk {
+                    q: num,
+                    r: T::ZERO,
+                    den: T::ONE,
+                    sq: e.step,
+                    sr: T::ZERO,
+                },
+            }
         }
     }
 
     #[inline(always)]
     fn clip(&self, lo: &mut T, hi: &mut T) {
-        match self {
-            EdgeRows::Lower(w) => *lo = (*lo).max(-w.q),
-            EdgeRows::Upper(w) => *hi = (*hi).min(w.q + T::ONE),
-            EdgeRows::Flat { num, .. } => {
-                if *num < T::ZERO {
+        match self.side {
+            Side::Lower => *lo = (*lo).max(-self.w.q),
+            Side::Upper => *hi = (*hi).min(self.w.q + T::ONE),
+            Side::Flat => {
+                if self.w.q < T::ZERO {
                     *hi = *lo;
                 }
             }
@@ -87,10 +127,7 @@ impl<T: EdgeInt> EdgeRows<T> {
 
     #[inline(always)]
     fn next(&mut self) {
-        match self {
-            EdgeRows::Lower(w) | EdgeRows::Upper(w) => w.next(),
-            EdgeRows::Flat { num, step } => *num += *step,
-        }
+        self.w.next();
     }
 }
 

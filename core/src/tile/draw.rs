@@ -54,6 +54,10 @@ where
     S: ShadingMode,
     X: TextureMode,
 {
+    /// Whether a span of one colour is a slice fill: no plane to test
+    /// (Z, window ID) and no dither to vary it by address.
+    const SLICE_FILLS: bool = Z::BITS == 0 && W::BITS == 0 && D::LOG2 == 0;
+
     /// Validates and draws one command, clipped to the tile (a textured
     /// triangle without its texture: [`Self::draw_textured`]).
     pub fn draw(&mut self, cmd: &Command) -> Result<(), Error> {
@@ -478,6 +482,29 @@ where
         };
         t.p = t.planes::<F>(v, BLEND);
         let starts = RowStarts::new::<P, T>(t);
+        if !QUAD
+            && Self::SLICE_FILLS
+            && v[0].color == v[1].color
+            && v[1].color == v[2].color
+            && st.plane_mask & F::MASK_ALL == F::MASK_ALL
+        {
+            // One colour, nothing to test or dither: every row is the
+            // span loop's slice fill of the same packed value (the colour
+            // planes are constant), without a row start or span entry per
+            // row (host, 1,077-px flat triangles: 0.47 -> 0.36 ns/px with
+            // the fill and traversal as they are now, measured).
+            let (s, _) = starts.at::<P, false, T>(t, &first);
+            let c = Self::pack_at(0, 0, s.c.map(|c| c + round_bias::<D>()));
+            for row in core::iter::once(first).chain(rows) {
+                let a = self.area;
+                let idx = ((row.py - a.y as i64) * a.w as i64 + (row.x0 - a.x as i64)) as usize;
+                let end = idx + (row.x1 - row.x0) as usize;
+                if end <= Self::CAPACITY {
+                    self.color.fill(idx..end, c);
+                }
+            }
+            return;
+        }
         self.triangle_row::<T, BLEND, QUAD>(t, q, &starts, &first, st);
         for row in rows {
             self.triangle_row::<T, BLEND, QUAD>(t, q, &starts, &row, st);
@@ -846,9 +873,7 @@ where
         }
         if MODE == OPAQUE
             && !MASKED
-            && Z::BITS == 0
-            && W::BITS == 0
-            && D::LOG2 == 0
+            && Self::SLICE_FILLS
             && (0..F::Lanes::LEN).all(|i| dc.lane(i) == 0)
         {
             // A flat span with nothing to test or dither: one colour,
