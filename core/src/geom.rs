@@ -51,6 +51,10 @@ impl Rect {
     /// assert_eq!(a.intersect(&Rect::new(2, 0, u32::MAX, 2)), Some(Rect::new(2, 0, 2, 2)));
     /// assert_eq!(a.intersect(&Rect::new(i32::MIN, 0, 10, 2)), None);
     /// ```
+    // Inlined on a host: out of line it was 8% of the host's small
+    // triangles (3.7 px each: 21.2 -> 19.4 ns/px, measured); the
+    // microcontrollers keep the compiler's choice (the M0's flash).
+    #[cfg_attr(not(target_arch = "arm"), inline)]
     pub fn intersect(&self, o: &Rect) -> Option<Rect> {
         // 32-bit: from the larger start, what is left of each extent (a
         // tile clips every triangle it draws: 87 instructions in `i64` on
