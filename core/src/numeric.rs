@@ -592,6 +592,25 @@ impl Divisor {
         }
     }
 
+    /// [`Self::round`] for `|n| < 2^30` and `d < 2^24`, in 32 bits: one
+    /// division instruction (or the Cortex-M0's reciprocal quotient) and
+    /// no 64-bit arithmetic. The same integer as [`Self::round`].
+    #[inline(always)]
+    pub(crate) fn round_small(&self, n: i32) -> i32 {
+        debug_assert!(n.unsigned_abs() < 1 << 30 && self.d < 1 << 24);
+        let num = n + (self.d as i32 >> 1);
+        // floor(m / d) = !floor(!m / d) for m < 0 (!m = -m - 1 >= 0).
+        let s = num >> 31;
+        let x = (num ^ s) as u32;
+        let q = if Self::DIV32 || Self::RECIP32 {
+            // `d < 2^24`: the divisor is narrow on these routes.
+            self.quot32(x)
+        } else {
+            x / self.d as u32
+        };
+        q as i32 ^ s
+    }
+
     /// `n / d` rounded to nearest, ties up: [`div_round`]`(n, d)` for
     /// `|n| < 2^62`.
     #[inline(always)]
@@ -858,6 +877,43 @@ mod tests {
                 g.wrapping_mul(k as i64),
                 "{g} {k}"
             );
+        }
+    }
+
+    #[test]
+    fn round_small_is_round_on_every_narrow_route() {
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        let check = |d: i64, n: i32| {
+            let want = div_round(n as i64, d);
+            assert_eq!(Divisor::new(d).round_small(n) as i64, want, "{n} / {d}");
+            for recip32 in [false, true] {
+                let by = Divisor::new_by(d, true, recip32);
+                assert_eq!(by.round_small(n) as i64, want, "{n} / {d} {by:?}");
+            }
+        };
+        for _ in 0..100_000 {
+            let d = (next() >> (40 + next() % 24)).max(1) as i64;
+            let n = (next() >> (34 + next() % 30)) as i32;
+            check(d, if next() & 1 == 0 { n } else { -n });
+        }
+        for d in [1i64, 2, 3, 31, 32, 961, (1 << 24) - 1] {
+            for n in [
+                0,
+                1,
+                -1,
+                (1 << 30) - 1,
+                -(1 << 30) + 1,
+                d as i32 / 2,
+                -(d as i32 / 2),
+            ] {
+                check(d, n);
+            }
         }
     }
 

@@ -22,7 +22,8 @@
 //!   the seed warns of when the triangle's depth varies;
 //! - [`QuadraticTexturing`], **the RE's**: each span is cut into segments
 //!   of up to 32 pixels at fixed screen columns; per segment `u` and `v` are
-//!   computed exactly (`s / q`) at its first pixel, its middle and its end,
+//!   computed exactly (`s / q`) at its first pixel and its end, its middle
+//!   from those and `q` (the exact perspective point, one 32-bit division),
 //!   and the quadratic through the three is stepped by second-order
 //!   forward differences — two additions per coordinate and pixel, the
 //!   fast-Phong unit's operation (§IV.2). A segment whose quadratic would
@@ -362,7 +363,7 @@ pub struct AffineTexturing;
 /// Perspective by quadratic interpolation along each span, the RE's
 /// ([module docs](self)), within `TOL` eighths of a texel (default half a
 /// texel): the speed-against-accuracy knob of the mode. A larger `TOL`
-/// splits fewer segments (fewer exact samples); [`NEVER_SPLIT`] keeps every
+/// splits fewer segments; [`NEVER_SPLIT`] keeps every
 /// 32-pixel segment whole. Measured on both axes in `reports/texture.md`
 /// and `reports/targets.md`.
 ///

@@ -4,37 +4,40 @@
 //! Every attribute is read at a point of the triangle from the same exact
 //! barycentric weights the Gouraud restart uses (`E_i inv`, 30 fraction
 //! bits, [`crate::setup`]), so a value depends on the point alone, never on
-//! the tile. Per span, at the row's first covered pixel `xr`, its last
-//! `xr + n` and (for the quadratic) its middle `xr + n/2` — the whole
-//! covered row, whatever the tile:
+//! the tile. Per span, at the row's first covered pixel `xr` and its last
+//! `xr + n` — the whole covered row, whatever the tile:
 //!
 //! - `u = s / q`, `v = t / q` (perspective) or `u`, `v` themselves
 //!   (affine), 32.32 texels;
 //! - the quadratic mode cuts the span into *segments* at the screen
 //!   columns that are multiples of [`SEGMENT`] (so a tile whose side and
 //!   origin are multiples of it meets one segment a row; the first and last
-//!   of a span shorter) and per segment of `m` pixels
-//!   steps the quadratic `f(k) = f0 + B k + A k^2` through the exact
-//!   `f(0)`, `f(m/2)`, `f(m)` as `f += d; d += dd` with
-//!   `dd = 2A = 4 c / m^2`, `d(0) = A + B = (2 c + m (f(m) - f(0) - 2 c)) / m^2`,
-//!   `c = f(0) - 2 f(m/2) + f(m)`, each rounded once (shifts for a whole
-//!   segment, a compile-time reciprocal of `m^2` otherwise); a tile
-//!   entering at `k` starts from `f0 + k d0 + k (k - 1)/2 dd`, the same
-//!   integers the steps reach. Segments bound the error whatever the span:
-//!   one quadratic over a 216-pixel span of a wall at depth ratio 3 is off
-//!   by a texel (measured, `tests/tests/texture.rs`), and the interpolation
-//!   error falls with the cube of the length;
+//!   of a span shorter), samples `u` and `v` exactly at each segment end,
+//!   and per segment of `m` pixels steps the quadratic
+//!   `f(k) = f0 + B k + A k^2` through `f(0)`, `f(m/2)`, `f(m)` as
+//!   `f += d; d += dd` ([`steps`]). The middle is not sampled: `s` and `q`
+//!   are linear along the row, so `u(k) = u0 + (u1 - u0) k q1 / (k q1 +
+//!   (m - k) q0)` exactly, from the ends and `q` by one 32-bit division
+//!   ([`between`], within 2^-14 of the segment's texel range; the exact
+//!   sample it replaces cost two 64-bit divisions and three 64-bit plane
+//!   evaluations). A tile entering at `k` starts from
+//!   `f0 + k d0 + k (k - 1)/2 dd`, the same integers the steps reach.
+//!   Segments bound the error whatever the span: one quadratic over a
+//!   216-pixel span of a wall at depth ratio 3 is off by a texel
+//!   (measured, `tests/tests/texture.rs`), and the interpolation error
+//!   falls with the cube of the length;
 //! - a segment whose quadratic would miss by more than half a texel (an
 //!   estimate from its second difference and how fast `q` changes across
 //!   it, [`too_curved`]) is halved, down to 2 pixels: only where depth
 //!   changes fast (a 32-pixel segment with `q` 4:1 across 16 texels is off
-//!   by 1.78 texels whole, 0.16 in quarters). The decision depends on the
-//!   segment's exact samples alone and a tile entering a row replays the
-//!   segments from the grid column before it, so tiling still cannot
-//!   change a pixel;
+//!   by 1.78 texels whole, 0.16 in quarters); the halves' ends and middles
+//!   come from [`between`] too. The decision depends on the segment's end
+//!   samples alone and a tile entering a row replays the segments from the
+//!   grid column before it, so tiling still cannot change a pixel;
 //! - the shade is linear along the span;
 //! - a span steps its coordinates in 32 bits, `I14.18` texels
-//!   ([`STEP_FRAC`]): the samples are exact, the steps rounded;
+//!   ([`STEP_FRAC`]): the samples are exact (rounded once to it), the
+//!   middles and steps rounded;
 //! - the pixel loop runs from one segment end to the next over a copy of
 //!   the stepped state ([`TexStep`]), so the quadratic's per-pixel work is
 //!   four 32-bit additions in registers, and a segment is loaded between
@@ -116,53 +119,40 @@ pub(crate) struct TexStep {
 
 /// A span's state: what its pixels step ([`TexStep`]) and, for the
 /// quadratic mode, the pixels left in the segment, the next segment's
-/// offset from `xr` and the exact coordinates there (the segment's end,
-/// 32.32), the span's last offset.
+/// offset from `xr` and the coordinates there (the segment's end,
+/// [`STEP_FRAC`] units), the span's last offset.
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct TexSpan {
     /// The stepped state at the span's current pixel.
     pub px: TexStep,
     left: i32,
     next: i64,
-    end: (i64, i64),
+    end: [i32; 2],
     /// `q` at the segment's end ([`TexSetup::uvq`]).
     end_q: i64,
     /// The end of the last segment split (twice its offset from `xr`),
-    /// its exact coordinates and `q`: where a later segment ends.
-    far: (i64, (i64, i64), i64),
+    /// its coordinates and `q`: where a later segment ends.
+    far: (i64, [i32; 2], i64),
+    /// The weights at the span's last pixel (the shade's), for the
+    /// segment that ends there.
+    w_end: (i64, i64),
     n: i64,
     /// `xr` modulo [`SEGMENT`]: where the screen's segment grid falls.
     phase: i64,
 }
 
-/// `1 / m^2` for the segment lengths `m` in `1..SEGMENT` (a partial
-/// segment at a span's ends), from a table computed at compile time (no
-/// division per segment): [`round_by_m2`].
-const BY_M2: [Divisor; SEGMENT as usize] = {
-    let mut t = [Divisor::new(1); SEGMENT as usize];
+/// `1 / m` and `1 / m^2` for the segment lengths `m` in `1..=SEGMENT`,
+/// computed at compile time: no division is set up per segment
+/// ([`steps`]).
+const BY_M: [[Divisor; 2]; SEGMENT as usize + 1] = {
+    let mut t = [[Divisor::new(1); 2]; SEGMENT as usize + 1];
     let mut m = 1;
-    while m < SEGMENT as usize {
-        t[m] = Divisor::new((m * m) as i64);
+    while m <= SEGMENT as usize {
+        t[m] = [Divisor::new(m as i64), Divisor::new((m * m) as i64)];
         m += 1;
     }
     t
 };
-
-/// A segment's step: the 32.32 difference `x` over `m^2` straight into
-/// [`STEP_FRAC`], `x / (m^2 2^b)` rounded once (`b = 32 - STEP_FRAC`),
-/// as `floor(floor((x + m^2 2^(b-1)) / 2^b) / m^2)` — the same integer
-/// (nested floors of positive divisors), but the quotient by `m^2 < 2^10`
-/// takes a dividend that the shift brought below 2^32: one reciprocal
-/// quotient on the Cortex-M0 instead of five 8-bit digits (with
-/// [`too_curved`]'s 32-bit products, the quadratic workload on the M0
-/// 44,871 -> 42,206 ticks: measured).
-#[inline(always)]
-fn round_by_m2(x: i64, m: i64) -> i64 {
-    const B: u32 = 32 - STEP_FRAC;
-    // `m < 32`: a 32-bit product (an `i64` one is a library call on the M0).
-    let h = (m as i32 * m as i32) as i64;
-    BY_M2[m as usize].round(((x + (h << (B - 1))) >> B) - h / 2)
-}
 
 impl TexSetup {
     pub(crate) fn new<Ln: Lanes, Tn: EdgeInt>(
@@ -237,6 +227,14 @@ impl TexSetup {
         ((u << 8, v << 8), q)
     }
 
+    /// `(u, v)` in [`STEP_FRAC`] units at a point of weights `w`, as
+    /// [`Self::uvq`] (rounded once), and `q` there.
+    #[inline(always)]
+    fn sample(&self, w: (i64, i64)) -> ([i32; 2], i64) {
+        let ((u, v), q) = self.uvq(w);
+        ([to_step(u), to_step(v)], q)
+    }
+
     /// The weights at offset `m2 / 2` pixels from the span start, whose
     /// edge values are `e` (the edge steps are even).
     #[inline(always)]
@@ -280,9 +278,10 @@ impl TexSetup {
                 s.px.ea = self.a;
             }
             PERSPECTIVE_QUADRATIC => {
+                s.w_end = w1;
                 s.phase = row.xr & (SEGMENT - 1);
                 let mut first = (((k + s.phase) & !(SEGMENT - 1)) - s.phase).max(0);
-                (s.end, s.end_q) = self.uvq(if first == 0 {
+                (s.end, s.end_q) = self.sample(if first == 0 {
                     w0
                 } else {
                     self.at(e, 2 * first)
@@ -322,87 +321,158 @@ impl TexSetup {
     fn segment(&self, s: &mut TexSpan, first: i64) {
         let mut m = (SEGMENT - ((first + s.phase) & (SEGMENT - 1))).min(s.n - first);
         if m <= 0 {
-            let p = s.end;
-            s.px.u = [to_step(p.0), 0, 0];
-            s.px.v = [to_step(p.1), 0, 0];
+            s.px.u = [s.end[0], 0, 0];
+            s.px.v = [s.end[1], 0, 0];
             s.left = i32::MAX;
             return;
         }
         let (p0, q0) = (s.end, s.end_q);
-        let e = s.px.e;
-        let (mut pm, mut qm) = self.uvq(self.at(e, 2 * first + m));
         let end = 2 * (first + m);
         let (mut p1, mut q1) = if s.far.0 == end {
             (s.far.1, s.far.2)
         } else {
-            self.uvq(self.at(e, end))
+            self.sample(if end == 2 * s.n {
+                s.w_end
+            } else {
+                self.at(s.px.e, end)
+            })
         };
+        // The middle from the ends and `q` ([`between`]): no sample.
+        let mut k = Knots::new(p0, between(p0, q0, p1, q1, m as u32, 2 * m as u32), p1);
         // Halve the segment while its quadratic would miss the curve by
         // more than half a texel ([`too_curved`]): only where the depth
         // changes fast across it. An even segment's middle is its first
         // half's end; the whole segment's end is kept for the segment that
         // ends there next.
-        while m >= 2 * MIN_SPLIT && too_curved(p0, pm, p1, q0, q1, self.tol) {
+        while m >= 2 * MIN_SPLIT
+            && self.tol != crate::texture::NEVER_SPLIT
+            && too_curved(k.c, q0, q1, self.tol)
+        {
             if 2 * (first + m) == end {
                 s.far = (end, p1, q1);
             }
-            (p1, q1) = if m % 2 == 0 {
-                (pm, qm)
+            // The first half's end, `h` of the `m` pixels on, and `q` there.
+            let h = m / 2;
+            p1 = if m % 2 == 0 {
+                k.pm
             } else {
-                self.uvq(self.at(e, 2 * (first + m / 2)))
+                between(p0, q0, p1, q1, 2 * h as u32, 2 * m as u32)
             };
-            m /= 2;
-            (pm, qm) = self.uvq(self.at(e, 2 * first + m));
+            q1 = ((h as u32 * q1 as u32 + (m - h) as u32 * q0 as u32) / m as u32) as i64;
+            m = h;
+            k = Knots::new(p0, between(p0, q0, p1, q1, m as u32, 2 * m as u32), p1);
         }
-        // `d(0) = A + B = (2 c + m (f(m) - f(0) - 2 c)) / m^2`, `dd = 4 c / m^2`
-        // with `c = f(0) - 2 f(m/2) + f(m)`: one rounding each, into
-        // STEP_FRAC (a shift for a power-of-two length).
-        s.px.u = steps(p0.0, pm.0, p1.0, m);
-        s.px.v = steps(p0.1, pm.1, p1.1, m);
+        s.px.u = steps(k.a[0], k.c[0], k.e[0], m);
+        s.px.v = steps(k.a[1], k.c[1], k.e[1], m);
         (s.end, s.end_q) = (p1, q1);
         s.left = m as i32;
         s.next = first + m;
     }
 }
 
+/// A segment's coordinates in [`STEP_FRAC`] units: `u` and `v` at its
+/// start (`a`) and end (`e`) and their second differences
+/// `c = a - 2 b + e` through the middle `b`, below 2^33 in magnitude
+/// (the coordinates are below 2^30 units); and the middle itself, the
+/// first half's end if the segment is split.
+#[derive(Debug, Clone, Copy)]
+struct Knots {
+    a: [i32; 2],
+    e: [i32; 2],
+    c: [i64; 2],
+    pm: [i32; 2],
+}
+
+impl Knots {
+    #[inline(always)]
+    fn new(a: [i32; 2], pm: [i32; 2], e: [i32; 2]) -> Self {
+        let c = core::array::from_fn(|i| a[i] as i64 - 2 * pm[i] as i64 + e[i] as i64);
+        Knots { a, e, c, pm }
+    }
+}
+
 /// A coordinate's `[f, d, dd]` over a segment of `m` pixels from its
-/// exact values `f0`, `fm`, `f1` at the start, middle and end (32.32).
-// Inlined where flash is plenty (the Cortex-M4: the quadratic workload
-// 21,760 -> 21,248 ticks); the compiler's choice on the Cortex-M0.
+/// values at the start `a` and end `e` and its second difference `c`
+/// ([`Knots`]): with `D = e - a`, the quadratic `a + B k + A k^2` through
+/// them steps `d(0) = A + B = (D - 2 c) / m + 2 c / m^2` and
+/// `dd = 2 A = 4 c / m^2`, each quotient rounded once (a shift for a
+/// power-of-two length, else one 32-bit division or reciprocal from
+/// [`BY_M`]): the roundings add under `2^-19 (1 + 2 k + k (k - 1) / 2)`
+/// texel after `k` steps, 2^-9 over a whole segment. Before: one 64-bit rounding of
+/// `(2 c + m (D - 2 c)) / m^2` from the 32.32 values, 177 instructions a
+/// segment for the two coordinates on the M4.
+// Inlined where flash is plenty (the Cortex-M4); the compiler's choice on
+// the Cortex-M0.
 #[cfg_attr(not(target_abi = "eabi"), inline(always))]
-fn steps(f0: i64, fm: i64, f1: i64, m: i64) -> [i32; 3] {
-    let c = f0 - 2 * fm + f1;
-    let (n1, n2) = (2 * c + mul_small(f1 - f0 - 2 * c, m as u32), 4 * c);
-    let (d1, d2) = if m.count_ones() == 1 {
-        let b = 2 * m.trailing_zeros() + 32 - STEP_FRAC;
-        let r = |x: i64| (x + (1 << (b - 1))) >> b;
-        (r(n1), r(n2))
+fn steps(a: i32, c: i64, e: i32, m: i64) -> [i32; 3] {
+    let d = e as i64 - a as i64 - 2 * c;
+    let [by_m, by_m2] = &BY_M[m as usize];
+    let (d1, d2) = if (d.unsigned_abs() | c.unsigned_abs() << 2) < 1 << 30 {
+        // Nearly always (differences below 2^12 texels): 32 bits.
+        let (d, c2, c4) = (d as i32, 2 * c as i32, 4 * c as i32);
+        let m = m as u32;
+        if m & (m - 1) == 0 {
+            let b = m.trailing_zeros();
+            let r = |x: i32, b: u32| (x + ((1 << b) >> 1)) >> b;
+            (r(d, b) + r(c2, 2 * b), r(c4, 2 * b))
+        } else {
+            (
+                by_m.round_small(d) + by_m2.round_small(c2),
+                by_m2.round_small(c4),
+            )
+        }
     } else {
-        (round_by_m2(n1, m), round_by_m2(n2, m))
+        let (d1, d2) = (by_m.round(d) + by_m2.round(2 * c), by_m2.round(4 * c));
+        (d1 as i32, d2 as i32)
     };
-    [to_step(f0), d1 as i32, d2 as i32]
+    [a, d1, d2]
+}
+
+/// The coordinates `k2 / m2` of the way from `p0` to `p1` ([`STEP_FRAC`]
+/// units, below 2^30)
+/// in perspective, where `q` runs linearly from `q0` to `q1` (below 2^24,
+/// positive; `k2 < m2 <= 2^7`): with `s = u q` linear too,
+/// `u(k) = u0 + (u1 - u0) k q1 / (k q1 + (m - k) q0)` exactly, so the
+/// point needs one 32-bit division for both coordinates instead of an
+/// exact sample's two 64-bit ones. The weight is taken to 16 fraction bits
+/// from its numerator and denominator cut to 16 significant bits: the
+/// point is within `|u1 - u0| 2^-14` of the exact one (2^-10 texel for a
+/// segment 16 texels long).
+#[inline(always)]
+fn between(p0: [i32; 2], q0: i64, p1: [i32; 2], q1: i64, k2: u32, m2: u32) -> [i32; 2] {
+    debug_assert!(k2 < m2 && m2 <= 1 << 7 && q0 > 0 && q1 > 0 && q0.max(q1) < 1 << 24);
+    // Both below 2^31.
+    let num = k2 * q1 as u32;
+    let den = num + (m2 - k2) * q0 as u32;
+    let cut = (32 - den.leading_zeros()).saturating_sub(16);
+    // `num <= den`: the weight is at most 2^16, kept below it so that the
+    // products below take the 16-bit multiplier.
+    let w = ((num >> cut) << 16) / (den >> cut);
+    let w = w.min(0xffff);
+    let lerp = |a: i32, b: i32| a + (mul_small(b as i64 - a as i64, w) >> 16) as i32;
+    [lerp(p0[0], p1[0]), lerp(p0[1], p1[1])]
 }
 
 /// The shortest segment a split leaves, pixels.
 const MIN_SPLIT: i64 = 2;
 
-/// Whether the quadratic through a segment's exact coordinates `p0`,
-/// `pm`, `p1` (32.32 texels) at its start, middle and end, where `q` runs
-/// from `q0` to `q1`, may miss the exact curve by more than `tol` eighths
-/// of a texel (half a texel by default).
+/// Whether the quadratic through a segment's coordinates at its start,
+/// middle and end, whose second differences are `c` ([`Knots`]), where `q`
+/// runs from `q0` to `q1`, may miss the exact curve by more than `tol`
+/// eighths of a texel (half a texel by default).
 /// With `q` linear along the span, `u = a + b / q`, whose third
 /// derivative is `-3 u'' q' / q`; a quadratic through three points `h`
 /// apart misses by at most `|u'''| h^3 / (9 sqrt 3)`, so with the second
-/// difference `c = p0 - 2 pm + p1`, about `u'' h^2`, the error is about
+/// difference `c`, about `u'' h^2`, the error is about
 /// `0.19 |c| rho` with `rho = |q1 - q0| / (2 min q)`. The estimate runs
 /// about 1.5x above the true error (a 32-pixel segment with `q` 4:1
 /// across 16 texels: estimated 2.7, true 1.78 texels), so a segment it
 /// keeps whole stays within about a third of a texel. `c` is taken in
 /// 2^-16 texels.
 #[inline(always)]
-fn too_curved(p0: (i64, i64), pm: (i64, i64), p1: (i64, i64), q0: i64, q1: i64, tol: u32) -> bool {
-    let c = |a: i64, m: i64, b: i64| ((a - 2 * m + b).unsigned_abs() >> 16).min(u32::MAX as u64);
-    let c = c(p0.0, pm.0, p1.0).max(c(p0.1, pm.1, p1.1));
+fn too_curved(c: [i64; 2], q0: i64, q1: i64, tol: u32) -> bool {
+    let c = c[0].unsigned_abs().max(c[1].unsigned_abs()) >> (STEP_FRAC - 16);
+    let c = c.min(u32::MAX as u64);
     // 0.095 |c| |q1 - q0| / min q > tol / 8 in integers: c < 2^32,
     // q < 2^24 and tol < 2^16, so each side is one 32x32-bit product
     // (`wide_mul`: no 64-bit multiply on the Cortex-M0) below 2^61.
@@ -478,7 +548,42 @@ pub(crate) fn coords<const MODE: u8>(ts: &TexSetup, s: &TexStep) -> (i64, i64) {
 
 #[cfg(test)]
 mod tests {
-    use super::too_curved;
+    use super::{between, to_step, too_curved, Knots};
+
+    /// [`between`] is the exact perspective point, `k / m` of the way in
+    /// screen space from `a` (where `q` is `q0`) to `e` (`q1`), within its
+    /// stated bound `|e - a| 2^-14` (plus the final rounding), over
+    /// pseudo-random ends, depths from 1 to 2^24 - 1 and every split point.
+    #[test]
+    fn the_middle_is_the_perspective_point() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = |bits: u32| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed >> (64 - bits)
+        };
+        for i in 0..20_000 {
+            let (a, e) = (next(30) as i32, next(30) as i32);
+            let mut q = |bits: u32| (next(bits) as i64).clamp(1, (1 << 24) - 1);
+            let (q0, q1) = match i % 3 {
+                0 => (q(24), q(24)),
+                1 => (q(12), q(24)),
+                _ => (q(4) + 1, q(8) + 1),
+            };
+            let m2 = 2 + next(6) as u32 % 63;
+            let k2 = 1 + next(6) as u32 % (m2 - 1);
+            let got = between([a, a], q0, [e, e], q1, k2, m2)[0];
+            let (k, m) = (k2 as f64, m2 as f64);
+            let t = k * q1 as f64 / (k * q1 as f64 + (m - k) * q0 as f64);
+            let want = a as f64 + (e as f64 - a as f64) * t;
+            let bound = (e as f64 - a as f64).abs() / 16384.0 + 1.0;
+            assert!(
+                (got as f64 - want).abs() <= bound,
+                "{a} {e} q {q0} {q1} {k2}/{m2}: {got} vs {want}"
+            );
+        }
+    }
 
     /// The largest error of the quadratic through `u` at `a`, `a + l/2`,
     /// `a + l`, sampled finely (f64).
@@ -515,9 +620,10 @@ mod tests {
                     let mut a = 0.0;
                     while a + l <= 32.0 {
                         let fx = |x: f64| (u(x) * 4294967296.0).round() as i64;
-                        let p = |x: f64| (fx(x), fx(x) / 2);
+                        let p = |x: f64| [to_step(fx(x)), to_step(fx(x) / 2)];
                         let (q0, q1) = (q(a).round() as i64, q(a + l).round() as i64);
-                        let split = too_curved(p(a), p(a + l / 2.0), p(a + l), q0, q1, 4);
+                        let k = Knots::new(p(a), p(a + l / 2.0), p(a + l));
+                        let split = too_curved(k.c, q0, q1, 4);
                         let miss = quadratic_miss(&u, a, l);
                         if split {
                             assert!(miss > 0.2, "{texels} {ratio} [{a}, +{l}]: {miss}");
@@ -534,18 +640,12 @@ mod tests {
         // The workload's wall: 16 texels, q 4:1, from the near end.
         let q = |x: f64| 16384.0 * (4.0 - 3.0 * x / 32.0);
         let u = |x: f64| (x / 2.0) / (q(x) / 16384.0);
-        let fx = |x: f64| ((u(x) * 4294967296.0).round() as i64, 0);
+        let fx = |x: f64| [to_step((u(x) * 4294967296.0).round() as i64), 0];
         // The segment of `l` pixels at the wall's far end (`q` smallest).
         let seg = |l: f64| {
             let a = 32.0 - l;
-            too_curved(
-                fx(a),
-                fx(a + l / 2.0),
-                fx(32.0),
-                q(a) as i64,
-                q(32.0) as i64,
-                4,
-            )
+            let k = Knots::new(fx(a), fx(a + l / 2.0), fx(32.0));
+            too_curved(k.c, q(a) as i64, q(32.0) as i64, 4)
         };
         assert!((quadratic_miss(&u, 0.0, 32.0) - 1.78).abs() < 0.01);
         assert!((quadratic_miss(&u, 16.0, 16.0) - 0.61).abs() < 0.01);
