@@ -222,7 +222,9 @@ impl TexSetup {
         // s, t, q with 8 more fraction bits: s < 2^40, so s 2^20 fits,
         // and q < 2^24 (exact quotients, rounded).
         let f = |i: usize| (self.f0[i] << 8) + self.lerp(i, w, 22);
-        let q = f(Q).max(1);
+        // `q` is a convex combination of the vertices' `u16`s: 32 bits
+        // hold it (a 64-bit `max` took 12 instructions on the M4).
+        let q = (f(Q) as i32).max(1) as i64;
         let (u, v) = div_round_pair(f(S) << 20, f(T) << 20, q);
         ((u << 8, v << 8), q)
     }
