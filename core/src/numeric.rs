@@ -643,6 +643,18 @@ pub(crate) fn pairs(k: i32) -> i32 {
     (k >> 1).wrapping_mul(k.wrapping_sub(1) | 1)
 }
 
+/// A xorshift64 generator from `seed` (non-zero): the unit tests'
+/// pseudo-random inputs, the same on every run.
+#[cfg(test)]
+pub(crate) fn xorshift(mut seed: u64) -> impl FnMut() -> u64 {
+    move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        seed
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -882,13 +894,7 @@ mod tests {
 
     #[test]
     fn round_small_is_round_on_every_narrow_route() {
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        };
+        let mut next = xorshift(0x2545_f491_4f6c_dd1d);
         let check = |d: i64, n: i32| {
             let want = div_round(n as i64, d);
             assert_eq!(Divisor::new(d).round_small(n) as i64, want, "{n} / {d}");
@@ -919,13 +925,7 @@ mod tests {
 
     #[test]
     fn divisor_rounds_like_div_round() {
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        };
+        let mut next = xorshift(0x9e37_79b9_7f4a_7c15);
         for _ in 0..200_000 {
             let d = (next() >> (1 + next() % 63)).max(1) as i64;
             let n = (next() >> (2 + next() % 62)) as i64 * if next() & 1 == 0 { 1 } else { -1 };

@@ -558,13 +558,8 @@ mod tests {
     /// pseudo-random ends, depths from 1 to 2^24 - 1 and every split point.
     #[test]
     fn the_middle_is_the_perspective_point() {
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = |bits: u32| {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed >> (64 - bits)
-        };
+        let mut random = crate::numeric::xorshift(0x9e37_79b9_7f4a_7c15);
+        let mut next = |bits: u32| random() >> (64 - bits);
         for i in 0..20_000 {
             let (a, e) = (next(30) as i32, next(30) as i32);
             let mut q = |bits: u32| (next(bits) as i64).clamp(1, (1 << 24) - 1);
