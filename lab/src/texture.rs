@@ -12,7 +12,8 @@
 //! span, one addition per coordinate and pixel), *quadratic* (the RE's:
 //! per segment of 32 pixels, halved where its quadratic would miss by more
 //! than half a texel, the quadratic through the exact coordinates at its
-//! ends and middle, two additions per coordinate and pixel),
+//! ends and the perspective point between them, two additions per
+//! coordinate and pixel),
 //! *exact* (`s / q`, `t / q` divided at every pixel).
 //!
 //! **Error** per covered pixel against the exact f64 mapping, texels: the
@@ -113,7 +114,8 @@ pub fn report(rows: &[Row], chart: &Path, pictures: &Path) -> String {
          their coordinates (bilinear, clamped): error in texels against the exact f64 \
          mapping, per covered pixel; host ns per covered pixel (median). Quadratic: per \
          segment of 32 px (halved where its quadratic would miss by more than half a \
-         texel), the quadratic through the exact coordinates at its ends and middle. The \
+         texel), the quadratic through the exact coordinates at its ends and the exact \
+         perspective point between them (from the ends and `q`). The \
          tolerance is the mode's knob (`QuadraticTexturing<TOL>`, eighths of a texel): \
          `quadratic-2` splits only past two texels, `quadratic-nosplit` never (the seed's \
          plain 32-px segments). Firmware instructions per pixel: `reports/targets.md`.\n\n\
