@@ -400,9 +400,9 @@ impl Knots {
 /// `dd = 2 A = 4 c / m^2`, each quotient rounded once (a shift for a
 /// power-of-two length, else one 32-bit division or reciprocal from
 /// [`BY_M`]): the roundings add under `2^-19 (1 + 2 k + k (k - 1) / 2)`
-/// texel after `k` steps, 2^-9 over a whole segment. Before: one 64-bit rounding of
-/// `(2 c + m (D - 2 c)) / m^2` from the 32.32 values, 177 instructions a
-/// segment for the two coordinates on the M4.
+/// texel after `k` steps, 2^-9 over a whole segment. Before: one 64-bit
+/// rounding of `(2 c + m (D - 2 c)) / m^2` from the 32.32 values, 177
+/// instructions a segment for the two coordinates on the M4 (profiled).
 // Inlined where flash is plenty (the Cortex-M4); the compiler's choice on
 // the Cortex-M0.
 #[cfg_attr(not(target_abi = "eabi"), inline(always))]
