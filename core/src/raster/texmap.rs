@@ -658,9 +658,9 @@ mod tests {
     }
 
     /// Walls of `texels` texels over 32 pixels with `q` falling `ratio`:1:
-    /// a segment the estimate keeps whole misses by at most half a texel,
-    /// and one it splits misses by more than a fifth (the estimate is
-    /// conservative, but not by more than 2.5x). At the far end of the
+    /// a segment the bound keeps whole misses by at most half a texel, and
+    /// one it splits misses by more than 0.45 texel (the bound is above
+    /// the miss, but by less than 11%). At the far end of the
     /// workload's wall (16 texels, 4:1) the quadratic misses by 1.78 texels
     /// over 32 pixels, 0.61 over 16, 0.16 over 8: split, split, kept.
     #[test]
