@@ -28,12 +28,13 @@
 //!   falls with the cube of the length;
 //! - a segment whose quadratic would miss by more than half a texel (a
 //!   bound within 1–10% of the true miss, from its second difference and
-//!   how fast `q` changes across it, [`too_curved`]) is halved, down to 2 pixels: only where depth
-//!   changes fast (a 32-pixel segment with `q` 4:1 across 16 texels is off
-//!   by 1.78 texels whole, 0.16 in quarters); the halves' ends and middles
-//!   come from [`between`] too. The decision depends on the segment's end
-//!   samples alone and a tile entering a row replays the segments from the
-//!   grid column before it, so tiling still cannot change a pixel;
+//!   how fast `q` changes across it, [`too_curved`]) is halved, down to 2
+//!   pixels: only where depth changes fast (a 32-pixel segment with `q`
+//!   4:1 across 16 texels is off by 1.78 texels whole, 0.16 in quarters);
+//!   the halves' ends and middles come from [`between`] too. The decision
+//!   depends on the segment's end samples alone and a tile entering a row
+//!   replays the segments from the grid column before it, so tiling still
+//!   cannot change a pixel;
 //! - the shade is linear in screen space: read at the span's start, it
 //!   steps by the triangle's own x-gradient ([`TexSetup`]'s `dl`);
 //! - a span steps its coordinates in 32 bits, `I14.18` texels
