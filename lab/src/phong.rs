@@ -131,7 +131,9 @@ pub fn sphere(slices: u32) -> (String, String) {
     (obj, mtl.to_string())
 }
 
-fn config() -> Config {
+/// The report's configuration: 240x240 RGB888 without dither, Z, 64x32
+/// tiles.
+pub fn config() -> Config {
     Config {
         width: 240,
         height: 240,
@@ -146,13 +148,27 @@ fn config() -> Config {
     }
 }
 
-/// The three methods' command lists and exact Phong's shading for a mesh.
-struct Built {
-    lists: [Vec<Command>; 3],
-    phong: HashMap<usize, PhongTri>,
+/// The three methods' command lists ([`METHODS`] order) and exact Phong's
+/// shading per triangle for a mesh.
+pub struct Built {
+    /// Gouraud, fast Phong and Taylor command lists.
+    pub lists: [Vec<Command>; 3],
+    /// Exact Phong's shading, by index into the Gouraud list.
+    pub phong: HashMap<usize, PhongTri>,
 }
 
-fn build(obj: &tilerast_sim::obj::Obj, spec: &MeshSpec) -> Built {
+impl Built {
+    /// Exact Phong at pixel centres (f64, unrounded): the reference.
+    pub fn exact(&self) -> RefFrame {
+        reference::render_shaded(&config(), &self.lists[0], &|k, w| {
+            self.phong.get(&k).map(|t| t.exact(w))
+        })
+    }
+}
+
+/// Builds the three methods' lists for `obj` under `spec` (its shading
+/// field is ignored) on [`config`]'s screen.
+pub fn build(obj: &tilerast_sim::obj::Obj, spec: &MeshSpec) -> Built {
     let list = |shading| {
         let spec = MeshSpec {
             shading,
@@ -248,9 +264,7 @@ pub fn measure(
 ) -> Result<(Row, [Image; 4]), String> {
     let cfg = config();
     let b = build(obj, spec);
-    let exact: RefFrame = reference::render_shaded(&cfg, &b.lists[0], &|k, w| {
-        b.phong.get(&k).map(|t| t.exact(w))
-    });
+    let exact = b.exact();
     let covered: Vec<bool> = exact.depth.iter().map(|d| *d < 65535.0).collect();
     let n_cov = covered.iter().filter(|c| **c).count().max(1);
     let w = cfg.width as usize;
@@ -329,14 +343,9 @@ pub fn measure(
 /// Sphere tessellations measured.
 pub const SLICES: [u32; 7] = [6, 8, 12, 16, 24, 32, 48];
 
-/// Every scene: the spheres (diffuse, then specular) and the teapot from
-/// `models` (both materials). Returns the rows and a picture per scene
-/// (Gouraud, fast Phong, Taylor, exact side by side).
-pub fn run(models: &Path, runs: usize) -> Result<(Vec<Row>, Vec<[Image; 4]>), String> {
-    let limits = tilerast_sim::Limits::default();
-    let dir = std::env::temp_dir().join(format!("tilerast-phong-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
-    let base = |obj: &str| MeshSpec {
+/// The spheres' and the teapot's view and light; `obj` names the mesh.
+fn base(obj: &str) -> MeshSpec {
+    MeshSpec {
         eye: [0.0, 0.4, 3.0],
         target: [0.0; 3],
         fov: 40.0,
@@ -344,40 +353,71 @@ pub fn run(models: &Path, runs: usize) -> Result<(Vec<Row>, Vec<[Image; 4]>), St
         ambient: 0.15,
         cull_back: true,
         ..MeshSpec::new(obj)
+    }
+}
+
+/// The sphere of [`sphere`]`(slices)`, parsed, and its view and light.
+pub fn sphere_scene(
+    slices: u32,
+    specular: bool,
+) -> Result<(tilerast_sim::obj::Obj, MeshSpec), String> {
+    let limits = tilerast_sim::Limits::default();
+    let dir = std::env::temp_dir().join(format!("tilerast-phong-{}-{slices}", std::process::id()));
+    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    let (o, m) = sphere(slices);
+    let obj = std::fs::write(dir.join("sphere.mtl"), m)
+        .map_err(|e| e.to_string())
+        .and_then(|_| {
+            tilerast_sim::obj::parse(o.as_bytes(), "sphere.obj", Some(&dir), &limits)
+                .map_err(|e| e.to_string())
+        });
+    let _ = std::fs::remove_dir_all(&dir);
+    let spec = MeshSpec {
+        specular,
+        ..base("sphere.obj")
     };
+    Ok((obj?, spec))
+}
+
+/// The seed's teapot from `models`, and its view and light.
+pub fn teapot_scene(
+    models: &Path,
+    specular: bool,
+) -> Result<(tilerast_sim::obj::Obj, MeshSpec), String> {
+    let limits = tilerast_sim::Limits::default();
+    let obj =
+        tilerast_sim::obj::load(&models.join("teapot.obj"), &limits).map_err(|e| e.to_string())?;
+    let spec = MeshSpec {
+        eye: [0.0, 1.4, 3.2],
+        target: [0.0, -0.05, 0.0],
+        fov: 34.0,
+        rotate_y: -30.0,
+        light: [0.5, 0.8, 0.6],
+        specular,
+        ..base("teapot.obj")
+    };
+    Ok((obj, spec))
+}
+
+/// Every scene: the spheres (diffuse, then specular) and the teapot from
+/// `models` (both materials). Returns the rows and a picture per scene
+/// (Gouraud, fast Phong, Taylor, exact side by side).
+pub fn run(models: &Path, runs: usize) -> Result<(Vec<Row>, Vec<[Image; 4]>), String> {
     let (mut rows, mut pics) = (Vec::new(), Vec::new());
     for specular in [false, true] {
         for slices in SLICES {
-            let (o, m) = sphere(slices);
-            std::fs::write(dir.join("sphere.mtl"), m).map_err(|e| e.to_string())?;
-            let obj = tilerast_sim::obj::parse(o.as_bytes(), "sphere.obj", Some(&dir), &limits)
-                .map_err(|e| e.to_string())?;
-            let spec = MeshSpec {
-                specular,
-                ..base("sphere.obj")
-            };
+            let (obj, spec) = sphere_scene(slices, specular)?;
             let (r, p) = measure(&format!("sphere {slices}"), &obj, &spec, runs)?;
             rows.push(r);
             pics.push(p);
         }
     }
-    let teapot = models.join("teapot.obj");
-    let obj = tilerast_sim::obj::load(&teapot, &limits).map_err(|e| e.to_string())?;
     for specular in [false, true] {
-        let spec = MeshSpec {
-            eye: [0.0, 1.4, 3.2],
-            target: [0.0, -0.05, 0.0],
-            fov: 34.0,
-            rotate_y: -30.0,
-            light: [0.5, 0.8, 0.6],
-            specular,
-            ..base("teapot.obj")
-        };
+        let (obj, spec) = teapot_scene(models, specular)?;
         let (r, p) = measure("teapot", &obj, &spec, runs)?;
         rows.push(r);
         pics.push(p);
     }
-    let _ = std::fs::remove_dir_all(&dir);
     Ok((rows, pics))
 }
 

@@ -62,7 +62,9 @@ pub struct Row {
     pub ns: [f64; 5],
 }
 
-fn config() -> Config {
+/// The report's configuration: 240x240 RGB888 without dither, Z, tiles
+/// of 240x32 (so a span is never cut by a tile edge).
+pub fn config() -> Config {
     Config {
         width: SIDE,
         height: SIDE,

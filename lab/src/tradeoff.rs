@@ -13,7 +13,20 @@
 //! - the dither matrix (none, 2x2, 4x4, 8x8) per display format;
 //! - antialiasing of solids: none, edge AA (seed 003 eq. 8), RUF-4/8/16
 //!   (seed 000), sparse supersampling 4/8/16, a 4x4 grid;
-//! - lines: Bresenham or two-point (Wu), RGB888 and RGB565.
+//! - lines: Bresenham or two-point (Wu), RGB888 and RGB565;
+//! - the geometry stage's back end (f64, f32, fixed `I16F16`);
+//! - shading between the vertices (seed 001 §IV.2): Gouraud, fast Phong
+//!   (ours) and Bishop & Weimer's Taylor colours, on a specular sphere and
+//!   the teapot, against exact Phong ([`crate::phong`]);
+//! - perspective texturing (seed 001 §IV.3): affine, the RE's quadratic
+//!   interpolation at three tolerances and exact division, on a rectangle
+//!   seen at depth ratios 4 and 16, against the exact mapping
+//!   ([`crate::texture`]);
+//! - alpha blending (seed 001 §IV.4): translucent panels drawn opaque or
+//!   blended over the gradient scene.
+//!
+//! Area-sampling antialiasing through α (seed 001 §IV.5) is a setting of
+//! the antialiasing family, beside edge AA, RUF and supersampling.
 //!
 //! The core has no approximate arithmetic to trade (setup is exact integer
 //! math and one reciprocal, 2^-11 LSB; the host's mesh projection is f64),
@@ -28,13 +41,20 @@
 //! reference in any channel or, for the depth knob, more than 1 off its
 //! depth (a wrong surface in front, a band, a shifted edge), in families
 //! whose coverage is the reference's.
+//! The shading, texturing and alpha families change colours inside
+//! surfaces, not coverage: shading and texturing measure against their own
+//! f64 reference at pixel centres (exact Phong; the exact perspective
+//! mapping, whose ramp texture turns colour error into texel error, 16 LSB
+//! a texel), which also stands in for the ideal; alpha blending against the
+//! blended scene's ordinary references.
 //!
 //! **Cost**: host time per pixel (median of repeated whole frames, the
 //! pipeline alone), tile RAM per pixel (`size_of` of the planes), memory
 //! traffic per frame (bytes read and written, counted by replaying the
 //! scene's fragments through the pixel kinds, [`crate::ruf::traffic_with`]),
-//! and instructions per pixel on the emulated Cortex-M4 for the settings the
-//! firmware measures (`reports/targets.md`, its own workloads).
+//! and instructions per pixel on the emulated Cortex-M4 and Cortex-M0 for
+//! the settings the firmware measures (`reports/targets.md`, its own
+//! workloads).
 //!
 //! Output: a Markdown table, a CSV and a chart of error against cost per
 //! family with each scene's Pareto front marked.
@@ -49,10 +69,12 @@ use tilerast::prelude::*;
 use tilerast_sim::image::Image;
 use tilerast_sim::mesh::GeometryKind;
 use tilerast_sim::metrics::{box_blur, compare, rms, Diff};
-use tilerast_sim::reference;
+use tilerast_sim::reference::{self, RefFrame};
 use tilerast_sim::render::{
-    render_as, render_timed, AaKind, Config, FormatKind, Rendered, SIM_GROUPS,
+    render_as, render_textured, render_timed, AaKind, Config, FormatKind, Rendered, TexKind,
+    SIM_GROUPS,
 };
+use tilerast_sim::texscene::{ramp, ramp_texels, texel_error, tilted_quad};
 
 /// Pixels more than this far off the pixel-centre reference, in any
 /// channel, are visible artifacts.
@@ -108,11 +130,17 @@ pub enum Family {
     Lines,
     /// The geometry stage's numeric back end (f32, fixed point, f64).
     Geometry,
+    /// Shading between the vertices: Gouraud, fast Phong, Taylor.
+    Shading,
+    /// Perspective texturing: affine, quadratic, exact.
+    Texturing,
+    /// Translucent commands drawn opaque or alpha-blended.
+    Alpha,
 }
 
 impl Family {
     /// Every family, in report order.
-    pub const ALL: [Family; 7] = [
+    pub const ALL: [Family; 10] = [
         Family::ColourBits,
         Family::Depth,
         Family::Subpixel,
@@ -120,6 +148,9 @@ impl Family {
         Family::Aa,
         Family::Lines,
         Family::Geometry,
+        Family::Shading,
+        Family::Texturing,
+        Family::Alpha,
     ];
     /// Its title.
     pub fn title(self) -> &'static str {
@@ -131,6 +162,9 @@ impl Family {
             Family::Aa => "antialiasing of solids",
             Family::Lines => "lines",
             Family::Geometry => "geometry back end",
+            Family::Shading => "shading between the vertices",
+            Family::Texturing => "perspective texturing",
+            Family::Alpha => "alpha blending",
         }
     }
     /// The cost and error its chart and Pareto front use, by name.
@@ -140,8 +174,10 @@ impl Family {
             Family::Depth => (Axis::BytesPx, Axis::Artifacts),
             Family::Subpixel => (Axis::Knob, Axis::IdealMse),
             Family::Dither => (Axis::NsPx, Axis::BlurRms),
-            Family::Aa | Family::Lines => (Axis::NsPx, Axis::IdealMse),
+            Family::Aa | Family::Lines | Family::Alpha => (Axis::NsPx, Axis::IdealMse),
             Family::Geometry => (Axis::NsVertex, Axis::CentreMse),
+            Family::Shading => (Axis::NsPx, Axis::CentreMse),
+            Family::Texturing => (Axis::NsPx, Axis::Texels),
         }
     }
 }
@@ -165,6 +201,8 @@ pub enum Axis {
     Artifacts,
     /// Host nanoseconds per vertex of the geometry stage.
     NsVertex,
+    /// The largest texel error over the covered pixels.
+    Texels,
 }
 
 impl Axis {
@@ -179,6 +217,7 @@ impl Axis {
             Axis::BlurRms => "RMS after 8x8 blur",
             Axis::Artifacts => "artifact pixels",
             Axis::NsVertex => "host ns/vertex",
+            Axis::Texels => "worst texel error",
         }
     }
     /// Its value at a point.
@@ -192,6 +231,7 @@ impl Axis {
             Axis::BlurRms => p.blur_rms,
             Axis::Artifacts => p.artifacts.unwrap_or(0) as f64,
             Axis::NsVertex => p.ns_vertex.unwrap_or(f64::NAN),
+            Axis::Texels => p.texels.unwrap_or(f64::NAN),
         }
     }
 }
@@ -231,6 +271,10 @@ pub struct Point {
     /// Instructions per pixel (per step for lines) on the emulated
     /// Cortex-M4, from the firmware's workload of this setting.
     pub m4: Option<f64>,
+    /// The same on the emulated Cortex-M0 (micro:bit).
+    pub m0: Option<f64>,
+    /// The largest texel error over the covered pixels (texturing).
+    pub texels: Option<f64>,
     /// Pareto-optimal within its family and scene on the family's axes.
     pub pareto: bool,
 }
@@ -244,10 +288,11 @@ struct Subject {
     edges: Vec<Command>,
     ideal: Image,
     centre_img: Image,
-    centre_depth: Vec<f64>,
+    centre: RefFrame,
     centre_blur: Vec<[f64; 3]>,
-    /// Per geometry back end: the scene's commands and host ns/vertex.
-    geometry: Vec<(GeometryKind, Vec<Command>, f64)>,
+    /// Settings that draw their own commands (geometry back ends, shading
+    /// methods), with host ns/vertex where the setting has it.
+    variants: Vec<(Setting, Vec<Command>, Option<f64>)>,
 }
 
 impl Subject {
@@ -255,18 +300,34 @@ impl Subject {
         // The ideal needs no edge-antialiasing commands and ignores them.
         let ideal = reference::supersample(&cfg, &cmds, samples).to_image();
         let centre = reference::render(&cfg, &cmds);
+        Subject {
+            ideal,
+            ..Subject::with_reference(name, cfg, cmds, centre)
+        }
+    }
+    /// A subject measured against `centre` alone (also its ideal): exact
+    /// Phong, the exact texture mapping.
+    fn with_reference(name: &str, cfg: Config, cmds: Vec<Command>, centre: RefFrame) -> Subject {
         let centre_img = centre.to_image();
         Subject {
             name: name.into(),
             cfg,
             cmds,
             edges: Vec::new(),
-            ideal,
+            ideal: centre_img.clone(),
             centre_blur: box_blur(&centre_img, BLUR),
             centre_img,
-            centre_depth: centre.depth,
-            geometry: Vec::new(),
+            centre,
+            variants: Vec::new(),
         }
+    }
+    /// The commands `set` draws: its own variant's, or the scene's.
+    fn cmds_of(&self, set: Setting) -> &[Command] {
+        self.variants
+            .iter()
+            .find(|v| v.0 == set)
+            .map(|v| v.1.as_slice())
+            .unwrap_or(&self.cmds)
     }
 }
 
@@ -356,6 +417,33 @@ pub fn crossing_scene() -> (Config, Vec<Command>) {
     (cfg(192, 128, true), cmds)
 }
 
+/// The gradient scene with translucent panels in front ([`Blend::Alpha`],
+/// Z tested, not written): a bluish rectangle at α 128 and a triangle whose
+/// α runs from 40 to 230 across it, overlapping each other and every
+/// surface behind, drawn back to front.
+pub fn glass_scene() -> (Config, Vec<Command>) {
+    let (c, mut cmds) = gradient_scene();
+    let a = |x, y, z, c, alpha| vtx(x, y, z, c).with_alpha(alpha);
+    let panel = [
+        a(30.5, 20.25, 8000, [120, 180, 255], 128),
+        a(150.75, 20.25, 8000, [120, 180, 255], 128),
+        a(150.75, 120.5, 8000, [160, 200, 255], 128),
+        a(30.5, 120.5, 8000, [160, 200, 255], 128),
+    ];
+    for t in [
+        [panel[0], panel[1], panel[2]],
+        [panel[0], panel[2], panel[3]],
+        [
+            a(90.2, 60.6, 6000, [255, 220, 60], 40),
+            a(232.1, 90.3, 6000, [255, 120, 40], 230),
+            a(120.4, 155.9, 6000, [255, 60, 160], 140),
+        ],
+    ] {
+        cmds.push(tri(t).blend(Blend::Alpha));
+    }
+    (c, cmds)
+}
+
 /// A model's scene with its depths squeezed into `units` of the 16-bit
 /// range: a small object far away in a deep view volume.
 fn squeezed(cmds: &[Command], units: u32) -> Vec<Command> {
@@ -406,21 +494,27 @@ pub fn snapped(cmds: &[Command], bits: u32) -> Vec<Command> {
 }
 
 /// The firmware's per-pixel (per-step for lines) instruction counts on the
-/// M4, by workload name, from `reports/targets.md`.
-fn m4_counts(targets: &str) -> Vec<(String, f64)> {
+/// M4 and the M0, by workload name, from `reports/targets.md`.
+fn fw_counts(targets: &str) -> Vec<(String, f64, Option<f64>)> {
     targets
         .lines()
         .filter_map(|l| {
             let cells: Vec<&str> = l.split('|').map(str::trim).collect();
             (cells.len() >= 4)
-                .then(|| Some((cells[1].to_string(), cells[2].parse().ok()?)))
+                .then(|| {
+                    Some((
+                        cells[1].to_string(),
+                        cells[2].parse().ok()?,
+                        cells[3].parse().ok(),
+                    ))
+                })
                 .flatten()
         })
         .collect()
 }
 
 /// A setting to measure.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 enum Setting {
     /// Colour fraction bits, in RGB888 without dither or RGB565 with 8x8.
     Colour(u32, bool),
@@ -434,6 +528,12 @@ enum Setting {
     Line(FormatKind, bool),
     /// The geometry stage's back end.
     Geometry(GeometryKind),
+    /// Index into [`crate::phong::METHODS`].
+    Shading(usize),
+    /// Perspective mode of the textured rectangle.
+    Texture(TexKind),
+    /// Translucent commands blended (or drawn opaque).
+    Alpha(bool),
 }
 
 impl Setting {
@@ -446,6 +546,9 @@ impl Setting {
             Setting::Aa(..) => Family::Aa,
             Setting::Line(..) => Family::Lines,
             Setting::Geometry(_) => Family::Geometry,
+            Setting::Shading(_) => Family::Shading,
+            Setting::Texture(_) => Family::Texturing,
+            Setting::Alpha(_) => Family::Alpha,
         }
     }
     fn label(self) -> String {
@@ -463,6 +566,14 @@ impl Setting {
             Setting::Geometry(GeometryKind::F32) => "f32 (core)".into(),
             Setting::Geometry(GeometryKind::Fixed) => "fixed I16F16 (core)".into(),
             Setting::Geometry(GeometryKind::Reference) => "f64 (reference)".into(),
+            Setting::Shading(m) => crate::phong::METHODS[m].into(),
+            Setting::Texture(TexKind::Quadratic) => "quadratic within ½ texel".into(),
+            Setting::Texture(TexKind::Quadratic2) => "quadratic within 2 texels".into(),
+            Setting::Texture(TexKind::QuadraticNoSplit) => "quadratic, 32-px segments".into(),
+            Setting::Texture(TexKind::Exact) => "exact division".into(),
+            Setting::Texture(k) => k.name().into(),
+            Setting::Alpha(false) => "opaque (α ignored)".into(),
+            Setting::Alpha(true) => "α-blended".into(),
         }
     }
     /// The label on the chart.
@@ -473,6 +584,15 @@ impl Setting {
             Setting::Depth(b, z) => format!("Z{b}/{z}"),
             Setting::Dither(_, 0) => "none".into(),
             Setting::Line(_, false) => "Bres.".into(),
+            Setting::Shading(0) => "Gouraud".into(),
+            Setting::Shading(1) => "fast Phong".into(),
+            Setting::Shading(_) => "Taylor".into(),
+            Setting::Texture(TexKind::Quadratic) => "quad ½".into(),
+            Setting::Texture(TexKind::Quadratic2) => "quad 2".into(),
+            Setting::Texture(TexKind::QuadraticNoSplit) => "quad 32".into(),
+            Setting::Texture(k) => k.name().into(),
+            Setting::Alpha(false) => "opaque".into(),
+            Setting::Alpha(true) => "blended".into(),
             _ => self.label(),
         }
     }
@@ -505,6 +625,25 @@ impl Setting {
             Setting::Line(FormatKind::Rgb565, true) => Some("two-point (Wu) antialiased, RGB565"),
             Setting::Dither(FormatKind::Rgb565, 0) => Some("Gouraud + Z + window ID"),
             Setting::Dither(FormatKind::Rgb565, 8) => Some("Gouraud + Z + window ID + 8x8 dither"),
+            Setting::Shading(0) | Setting::Alpha(false) => Some("large triangles: Gouraud + Z"),
+            // Taylor's colours are drawn by the same quadratic command.
+            Setting::Shading(_) => Some("large triangles: fast Phong (quadratic, seed 001 §IV.2) + Z"),
+            Setting::Alpha(true) => {
+                Some("large triangles: Gouraud + Z, alpha-blended (per-vertex α)")
+            }
+            Setting::Texture(TexKind::Affine) => {
+                Some("large triangles: textured (16x16 RGB565, nearest, q 4:1) + Z, affine")
+            }
+            Setting::Texture(TexKind::Quadratic) => Some(
+                "the same, perspective by quadratic interpolation along the span (seed 001 §IV.3)",
+            ),
+            Setting::Texture(TexKind::Exact) => {
+                Some("the same, perspective by division at every pixel")
+            }
+            Setting::Texture(TexKind::Quadratic2) => {
+                Some("the same, quadratic within two texels (`QuadraticTexturing<16>`)")
+            }
+            Setting::Texture(TexKind::QuadraticNoSplit) => Some("the same, quadratic never split (`QuadraticTexturing<NEVER_SPLIT>`, the seed's 32-px segments)"),
             _ => None,
         }
     }
@@ -603,10 +742,16 @@ fn coverage_traffic(s: &Subject, k: AaKind) -> u64 {
 }
 
 /// Measures one setting on one subject.
-fn measure(s: &Subject, set: Setting, runs: usize, m4: &[(String, f64)]) -> Result<Point, String> {
+fn measure(
+    s: &Subject,
+    set: Setting,
+    runs: usize,
+    fw: &[(String, f64, Option<f64>)],
+) -> Result<Point, String> {
     let base = s.cfg;
     let err = |e: Error| format!("{} / {}: {e:?}", s.name, set.label());
     let mut artifacts_meaningful = true;
+    let mut texels = None;
     let (r, traffic) = match set {
         Setting::Colour(c, false) => (
             colour_bits::<Rgb888Format, NoDither>(c, &base, &s.cmds, runs),
@@ -676,17 +821,45 @@ fn measure(s: &Subject, set: Setting, runs: usize, m4: &[(String, f64)]) -> Resu
             let cfg = Config { format: f, ..base };
             (render_timed(&cfg, &with_line_aa(&s.cmds, wu), runs), None)
         }
-        Setting::Geometry(k) => {
-            let cmds = s
-                .geometry
-                .iter()
-                .find(|g| g.0 == k)
-                .map(|g| g.1.as_slice())
-                .unwrap_or(&s.cmds);
+        Setting::Geometry(_) | Setting::Shading(_) => {
+            let cmds = s.cmds_of(set);
+            // The replay counts triangles: the quadratic commands of the
+            // shading methods cover the Gouraud list's fragments.
+            let covered = if matches!(set, Setting::Shading(_)) {
+                &s.cmds
+            } else {
+                cmds
+            };
             (
                 render_timed(&base, cmds, runs),
-                Some(aliased_traffic(cmds, &s.cfg, FormatKind::Rgb888, 2)),
+                Some(aliased_traffic(covered, &s.cfg, FormatKind::Rgb888, 2)),
             )
+        }
+        Setting::Texture(kind) => {
+            let ramp_texels = ramp_texels();
+            let r = render_textured(&base, &s.cmds, &[ramp(&ramp_texels)], kind, runs);
+            texels = r.as_ref().ok().map(|r| texel_error(r, &s.centre).max);
+            // The texture's reads come on top of the aliased pipeline's.
+            (r, None)
+        }
+        Setting::Alpha(blend) => {
+            let cmds: Vec<Command> = if blend {
+                s.cmds.clone()
+            } else {
+                s.cmds
+                    .iter()
+                    .map(|c| {
+                        let mut c = *c;
+                        if let Some(st) = c.state_mut() {
+                            st.blend = Blend::Opaque;
+                        }
+                        c
+                    })
+                    .collect()
+            };
+            // The replay does not blend (a blend reads the colour and
+            // writes no Z): no traffic figure.
+            (render_timed(&base, &cmds, runs), None)
         }
     };
     let r = r.map_err(err)?;
@@ -696,7 +869,7 @@ fn measure(s: &Subject, set: Setting, runs: usize, m4: &[(String, f64)]) -> Resu
             .filter(|&i| {
                 let (a, b) = (r.image.pixels[i], s.centre_img.pixels[i]);
                 let wrong_colour = (0..3).any(|c| a[c].abs_diff(b[c]) > ARTIFACT_LSB);
-                let (z, zr) = (r.depth[i] as f64, s.centre_depth[i]);
+                let (z, zr) = (r.depth[i] as f64, s.centre.depth[i]);
                 // Depth counts where depth is the knob: elsewhere a moved
                 // vertex shifts depth invisibly.
                 let wrong_depth = matches!(set, Setting::Depth(..))
@@ -706,6 +879,9 @@ fn measure(s: &Subject, set: Setting, runs: usize, m4: &[(String, f64)]) -> Resu
             })
             .count() as u64
     });
+    let fw_row = set
+        .workload()
+        .and_then(|w| fw.iter().find(|(n, ..)| n == w));
     Ok(Point {
         family: set.family(),
         scene: match set.series() {
@@ -720,15 +896,12 @@ fn measure(s: &Subject, set: Setting, runs: usize, m4: &[(String, f64)]) -> Resu
         blur_rms: rms(&box_blur(&r.image, BLUR), &s.centre_blur),
         artifacts,
         ns_px: r.ns_per_pixel.unwrap_or(f64::NAN),
-        ns_vertex: match set {
-            Setting::Geometry(k) => s.geometry.iter().find(|g| g.0 == k).map(|g| g.2),
-            _ => None,
-        },
+        ns_vertex: s.variants.iter().find(|v| v.0 == set).and_then(|v| v.2),
         bytes_px: r.bits_per_pixel as f64 / 8.0,
         traffic,
-        m4: set
-            .workload()
-            .and_then(|w| m4.iter().find(|(n, _)| n == w).map(|(_, v)| *v)),
+        m4: fw_row.map(|r| r.1),
+        m0: fw_row.and_then(|r| r.2),
+        texels,
         pareto: false,
     })
 }
@@ -761,8 +934,8 @@ pub fn run(opt: &Options) -> Result<Vec<Point>, String> {
     let mut plan: Vec<(usize, Setting)> = Vec::new();
     let mut subjects: Vec<Subject> = Vec::new();
     let n = opt.ideal_samples;
-    let m4 = std::fs::read_to_string("reports/targets.md")
-        .map(|t| m4_counts(&t))
+    let fw = std::fs::read_to_string("reports/targets.md")
+        .map(|t| fw_counts(&t))
         .unwrap_or_default();
 
     let (c, cmds) = gradient_scene();
@@ -823,12 +996,52 @@ pub fn run(opt: &Options) -> Result<Vec<Point>, String> {
                 let sc = crate::ruf::model_scene_with(&path, word)?;
                 let ns =
                     tilerast_sim::mesh::vertex_stage_ns(&obj, &spec, crate::ruf::SIZE, k, opt.runs);
-                sub.geometry.push((k, sc.commands, ns));
+                sub.variants
+                    .push((Setting::Geometry(k), sc.commands, Some(ns)));
             }
             subjects.push(sub);
             geometry_subjects.push(subjects.len() - 1);
         }
     }
+    // Shading: each method's commands against exact Phong.
+    let mut lit = Vec::new();
+    let mut shaded = vec![(
+        "sphere, 12 slices, specular".to_string(),
+        crate::phong::sphere_scene(12, true)?,
+    )];
+    if let Some(dir) = &opt.models {
+        shaded.push((
+            "teapot 240x240, specular".into(),
+            crate::phong::teapot_scene(dir, true)?,
+        ));
+    }
+    for (name, (obj, spec)) in shaded {
+        let b = crate::phong::build(&obj, &spec);
+        let mut sub =
+            Subject::with_reference(&name, crate::phong::config(), b.lists[0].clone(), b.exact());
+        for (m, list) in b.lists.into_iter().enumerate() {
+            sub.variants.push((Setting::Shading(m), list, None));
+        }
+        subjects.push(sub);
+        lit.push(subjects.len() - 1);
+    }
+    // Texturing: the tilted rectangle against the exact mapping.
+    let mut tilted = Vec::new();
+    for ratio in [4.0, 16.0] {
+        let cfg = crate::texture::config();
+        let cmds = tilted_quad(cfg.width, cfg.height, ratio);
+        let exact = reference::render_textured(&cfg, &cmds, &[ramp(&ramp_texels())]);
+        subjects.push(Subject::with_reference(
+            &format!("rectangle at depth ratio {ratio}"),
+            cfg,
+            cmds.to_vec(),
+            exact,
+        ));
+        tilted.push(subjects.len() - 1);
+    }
+    let (c, cmds) = glass_scene();
+    subjects.push(Subject::new("translucent panels 240x160", c, cmds, n));
+    let glass = subjects.len() - 1;
     let (gradient, luma, crossing, lines) = (0, 1, 2, 3);
     let teapot = models.first().copied();
 
@@ -894,6 +1107,25 @@ pub fn run(opt: &Options) -> Result<Vec<Point>, String> {
         }
     }
 
+    for &t in &lit {
+        for m in 0..crate::phong::METHODS.len() {
+            plan.push((t, Setting::Shading(m)));
+        }
+    }
+    for &t in &tilted {
+        for k in [
+            TexKind::Affine,
+            TexKind::QuadraticNoSplit,
+            TexKind::Quadratic2,
+            TexKind::Quadratic,
+            TexKind::Exact,
+        ] {
+            plan.push((t, Setting::Texture(k)));
+        }
+    }
+    plan.push((glass, Setting::Alpha(false)));
+    plan.push((glass, Setting::Alpha(true)));
+
     let mut out = Vec::with_capacity(plan.len());
     // A progress bar on a terminal; nothing when piped (CI logs) or off.
     let bar = if opt.progress {
@@ -908,7 +1140,7 @@ pub fn run(opt: &Options) -> Result<Vec<Point>, String> {
     );
     for (s, set) in &plan {
         bar.set_message(format!("{}: {}", subjects[*s].name, set.label()));
-        out.push(measure(&subjects[*s], *set, opt.runs, &m4)?);
+        out.push(measure(&subjects[*s], *set, opt.runs, &fw)?);
         bar.inc(1);
     }
     bar.finish_and_clear();
@@ -923,11 +1155,11 @@ fn opt<T>(v: Option<T>, f: impl Fn(T) -> String) -> String {
 /// The points as CSV, one row each.
 pub fn csv(points: &[Point]) -> String {
     let mut s = String::from(
-        "family,scene,setting,knob_bits,ideal_eq8_per_px,ideal_psnr_db,ideal_max,centre_eq8_per_px,centre_psnr_db,centre_max,blur_rms,artifact_px,host_ns_per_px,m4_instr_per_px,tile_bytes_per_px,traffic_bytes_per_frame,pareto\n",
+        "family,scene,setting,knob_bits,ideal_eq8_per_px,ideal_psnr_db,ideal_max,centre_eq8_per_px,centre_psnr_db,centre_max,blur_rms,artifact_px,host_ns_per_px,m4_instr_per_px,tile_bytes_per_px,traffic_bytes_per_frame,m0_instr_per_px,worst_texel_error,pareto\n",
     );
     for p in points {
         s += &format!(
-            "{},{},{},{},{:.3},{:.2},{},{:.3},{:.2},{},{:.3},{},{:.2},{},{},{},{}\n",
+            "{},{},{},{},{:.3},{:.2},{},{:.3},{:.2},{},{:.3},{},{:.2},{},{},{},{},{},{}\n",
             p.family.title(),
             p.scene,
             p.setting.replace(',', ";"),
@@ -944,6 +1176,8 @@ pub fn csv(points: &[Point]) -> String {
             opt(p.m4, |m| format!("{m:.1}")),
             p.bytes_px,
             opt(p.traffic, |t| t.to_string()),
+            opt(p.m0, |m| format!("{m:.1}")),
+            opt(p.texels, |t| format!("{t:.3}")),
             p.pareto
         );
     }
@@ -961,8 +1195,8 @@ pub fn markdown(points: &[Point]) -> String {
         let (cx, ex) = f.axes();
         s += &format!(
             "### {}\n\nPareto front (**bold**): {} against {}.\n\n\
-             | scene | setting | eq.8/px vs ideal | PSNR vs ideal | max | eq.8/px vs centre | PSNR vs centre | blur RMS | artifacts | host ns/px | M4 instr/px | tile B/px | traffic B/frame |\n\
-             | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+             | scene | setting | eq.8/px vs ideal | PSNR vs ideal | max | eq.8/px vs centre | PSNR vs centre | blur RMS | artifacts | host ns/px | M4 instr/px | M0 instr/px | tile B/px | traffic B/frame |\n\
+             | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
             f.title(),
             ex.label(),
             cx.label()
@@ -976,8 +1210,11 @@ pub fn markdown(points: &[Point]) -> String {
             if let Some(ns) = p.ns_vertex {
                 set += &format!(", {ns:.1} host ns/vertex");
             }
+            if let Some(t) = p.texels {
+                set += &format!(", worst {t:.2} texel");
+            }
             s += &format!(
-                "| {} | {} | {:.1} | {:.2} | {} | {:.2} | {:.2} | {:.3} | {} | {:.2} | {} | {} | {} |\n",
+                "| {} | {} | {:.1} | {:.2} | {} | {:.2} | {:.2} | {:.3} | {} | {:.2} | {} | {} | {} | {} |\n",
                 p.scene,
                 set,
                 p.ideal.mse_per_pixel,
@@ -989,6 +1226,7 @@ pub fn markdown(points: &[Point]) -> String {
                 opt(p.artifacts, |a| a.to_string()),
                 p.ns_px,
                 opt(p.m4, |m| format!("{m:.1}")),
+                opt(p.m0, |m| format!("{m:.1}")),
                 p.bytes_px,
                 opt(p.traffic, |t| t.to_string()),
             );
@@ -1017,10 +1255,17 @@ pub fn report(
          dither trades for noise); *artifacts* counts pixels more than {ARTIFACT_LSB}/255 off \
          the pixel-centre reference in any channel or, for the depth knob, more than {ARTIFACT_Z} \
          off its depth, in families whose coverage is the reference's (a wrong surface in front, a band, a moved \
-         edge).\n\n\
+         edge). Shading and texturing change colours inside surfaces, not coverage: they are measured \
+         against their own f64 reference at pixel centres, which stands in for the ideal too (exact Phong: \
+         the normal interpolated and normalised at every pixel; the exact perspective mapping, whose ramp \
+         texture turns colour error into texel error, 16 LSB a texel, so artifacts there are pixels more \
+         than half a texel off); alpha blending is measured against the blended scene's references.\n\n\
          **Cost**: host ns/px is the median of {} whole frames, pipeline only, on this machine \
-         (noisy: compare within a table); M4 instr/px is the firmware's own workload of that \
-         setting under QEMU (`reports/targets.md`, RGB565; per step for lines); tile B/px is \
+         (noisy: compare within a table); M4 and M0 instr/px are the firmware's own workload of that \
+         setting under QEMU (`reports/targets.md`, RGB565; per step for lines; the shading, texturing \
+         and alpha rows quote its large-triangle workloads, the texturing ones a 16x16 texture with \
+         nearest sampling at depth ratio 4, Taylor the fast Phong command that draws its colours, \
+         opaque the same triangles in planes without blending); tile B/px is \
          `size_of` of the planes; traffic is bytes read and written per frame, counted by \
          replaying the scene's fragments through the pixel kinds (edge AA's blends estimated \
          as one per major-axis step).\n\n\
@@ -1140,7 +1385,10 @@ mod tests {
     #[test]
     fn m4_table_rows_parse() {
         let t = "| workload | a | b |\n| --- | ---: | ---: |\n| Gouraud + Z | 341.7 | 1421.0 |\n";
-        assert_eq!(m4_counts(t), vec![("Gouraud + Z".to_string(), 341.7)]);
+        assert_eq!(
+            fw_counts(t),
+            vec![("Gouraud + Z".to_string(), 341.7, Some(1421.0))]
+        );
     }
 
     #[test]

@@ -73,6 +73,35 @@ fn the_sweep_measures_what_the_report_claims() {
         assert!(p.iter().any(|q| q.family == f && q.pareto), "{f:?}");
     }
     assert!(!find(&p, "crossing", "Z32, 0 Z bits").pareto);
+    // Shading: fast Phong is closer to exact Phong than Gouraud on the
+    // specular sphere, and draws at most a few pixels far off it.
+    let shade = |s| find(&p, "sphere, 12 slices", s);
+    let (gouraud, fast) = (shade("Gouraud"), shade("fast Phong (ours)"));
+    assert!(
+        fast.centre.mse_per_pixel < gouraud.centre.mse_per_pixel / 2.0,
+        "{} vs {}",
+        fast.centre.mse_per_pixel,
+        gouraud.centre.mse_per_pixel
+    );
+    assert!(fast.artifacts.unwrap() < gouraud.artifacts.unwrap());
+    // Texturing at depth ratio 16: affine misses by texels, the quadratic
+    // within its half texel, exact division closer still; the looser
+    // tolerances lie between.
+    let tex = |s| find(&p, "rectangle at depth ratio 16", s).texels.unwrap();
+    assert!(tex("affine") > 2.0, "{}", tex("affine"));
+    assert!(tex("quadratic within ½ texel") <= 0.5);
+    assert!(tex("exact division") < 0.2, "{}", tex("exact division"));
+    assert!(tex("quadratic within ½ texel") <= tex("quadratic within 2 texels"));
+    assert!(tex("quadratic within 2 texels") <= tex("affine"));
+    // Translucent panels drawn opaque are far off the blended picture;
+    // blended, every pixel lies within the blend's rounding of it.
+    let glass = |s| find(&p, "translucent panels", s);
+    assert!(glass("opaque (α ignored)").artifacts.unwrap() > 5000);
+    assert_eq!(glass("α-blended").artifacts, Some(0));
+    assert!(glass("α-blended").centre.max_abs <= 2);
+    for f in [Family::Shading, Family::Texturing, Family::Alpha] {
+        assert!(p.iter().any(|q| q.family == f && q.pareto), "{f:?}");
+    }
     // The CSV has a row per point.
     assert_eq!(tradeoff::csv(&p).lines().count(), p.len() + 1);
 }
