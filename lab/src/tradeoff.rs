@@ -49,7 +49,8 @@
 //! blended scene's ordinary references.
 //!
 //! **Cost**: host time per pixel (median of repeated whole frames, the
-//! pipeline alone), tile RAM per pixel (`size_of` of the planes), memory
+//! pipeline alone, every setting timed once per turn so that a slow spell
+//! of the machine falls on all of them alike), tile RAM per pixel (`size_of` of the planes), memory
 //! traffic per frame (bytes read and written, counted by replaying the
 //! scene's fragments through the pixel kinds, [`crate::ruf::traffic_with`]),
 //! and instructions per pixel on the emulated Cortex-M4 and Cortex-M0 for
@@ -742,16 +743,19 @@ fn coverage_traffic(s: &Subject, k: AaKind) -> u64 {
 }
 
 /// Measures one setting on one subject.
-fn measure(
-    s: &Subject,
-    set: Setting,
-    runs: usize,
-    fw: &[(String, f64, Option<f64>)],
-) -> Result<Point, String> {
+/// A setting drawn: the frame (timed when asked), its traffic, and
+/// whether its artifact count means something.
+struct Drawn {
+    r: Rendered,
+    traffic: Option<u64>,
+    artifacts_meaningful: bool,
+}
+
+/// Draws one setting on one subject, timing `runs` renders first.
+fn draw(s: &Subject, set: Setting, runs: usize) -> Result<Drawn, String> {
     let base = s.cfg;
     let err = |e: Error| format!("{} / {}: {e:?}", s.name, set.label());
     let mut artifacts_meaningful = true;
-    let mut texels = None;
     let (r, traffic) = match set {
         Setting::Colour(c, false) => (
             colour_bits::<Rgb888Format, NoDither>(c, &base, &s.cmds, runs),
@@ -837,10 +841,11 @@ fn measure(
         }
         Setting::Texture(kind) => {
             let ramp_texels = ramp_texels();
-            let r = render_textured(&base, &s.cmds, &[ramp(&ramp_texels)], kind, runs);
-            texels = r.as_ref().ok().map(|r| texel_error(r, &s.centre).max);
             // The texture's reads come on top of the aliased pipeline's.
-            (r, None)
+            (
+                render_textured(&base, &s.cmds, &[ramp(&ramp_texels)], kind, runs),
+                None,
+            )
         }
         Setting::Alpha(blend) => {
             let cmds: Vec<Command> = if blend {
@@ -862,7 +867,22 @@ fn measure(
             (render_timed(&base, &cmds, runs), None)
         }
     };
-    let r = r.map_err(err)?;
+    Ok(Drawn {
+        r: r.map_err(err)?,
+        traffic,
+        artifacts_meaningful,
+    })
+}
+
+/// Measures one setting on one subject, all but its host time
+/// ([`run`] times the settings in turns).
+fn measure(s: &Subject, set: Setting, fw: &[(String, f64, Option<f64>)]) -> Result<Point, String> {
+    let Drawn {
+        r,
+        traffic,
+        artifacts_meaningful,
+    } = draw(s, set, 0)?;
+    let texels = matches!(set, Setting::Texture(_)).then(|| texel_error(&r, &s.centre).max);
     let centre = compare(&r.image, &s.centre_img).map_err(|e| e.to_string())?;
     let artifacts = artifacts_meaningful.then(|| {
         (0..r.raw.len())
@@ -895,7 +915,7 @@ fn measure(
         centre,
         blur_rms: rms(&box_blur(&r.image, BLUR), &s.centre_blur),
         artifacts,
-        ns_px: r.ns_per_pixel.unwrap_or(f64::NAN),
+        ns_px: f64::NAN,
         ns_vertex: s.variants.iter().find(|v| v.0 == set).and_then(|v| v.2),
         bytes_px: r.bits_per_pixel as f64 / 8.0,
         traffic,
@@ -1129,7 +1149,7 @@ pub fn run(opt: &Options) -> Result<Vec<Point>, String> {
     let mut out = Vec::with_capacity(plan.len());
     // A progress bar on a terminal; nothing when piped (CI logs) or off.
     let bar = if opt.progress {
-        indicatif::ProgressBar::new(plan.len() as u64)
+        indicatif::ProgressBar::new((plan.len() * (1 + opt.runs)) as u64)
     } else {
         indicatif::ProgressBar::hidden()
     };
@@ -1140,8 +1160,27 @@ pub fn run(opt: &Options) -> Result<Vec<Point>, String> {
     );
     for (s, set) in &plan {
         bar.set_message(format!("{}: {}", subjects[*s].name, set.label()));
-        out.push(measure(&subjects[*s], *set, opt.runs, &fw)?);
+        out.push(measure(&subjects[*s], *set, &fw)?);
         bar.inc(1);
+    }
+    // Host time: one timed render of every setting per turn, `runs` turns,
+    // the median kept, so that the machine's slow spells (seconds long on
+    // a shared host) fall on every setting alike instead of on whichever
+    // settings were timed during them.
+    let mut times = vec![Vec::with_capacity(opt.runs); plan.len()];
+    for turn in 0..opt.runs {
+        bar.set_message(format!("timing, turn {} of {}", turn + 1, opt.runs));
+        for ((s, set), t) in plan.iter().zip(&mut times) {
+            let ns = draw(&subjects[*s], *set, 1)?.r.ns_per_pixel;
+            t.push(ns.unwrap_or(f64::NAN));
+            bar.inc(1);
+        }
+    }
+    for (p, mut t) in out.iter_mut().zip(times) {
+        t.sort_by(f64::total_cmp);
+        if !t.is_empty() {
+            p.ns_px = t[t.len() / 2];
+        }
     }
     bar.finish_and_clear();
     mark_pareto(&mut out);
@@ -1161,7 +1200,7 @@ pub fn csv(points: &[Point]) -> String {
         s += &format!(
             "{},{},{},{},{:.3},{:.2},{},{:.3},{:.2},{},{:.3},{},{:.2},{},{},{},{},{},{}\n",
             p.family.title(),
-            p.scene,
+            p.scene.replace(',', ";"),
             p.setting.replace(',', ";"),
             opt(p.knob_bits, |b| b.to_string()),
             p.ideal.mse_per_pixel,
@@ -1260,8 +1299,9 @@ pub fn report(
          the normal interpolated and normalised at every pixel; the exact perspective mapping, whose ramp \
          texture turns colour error into texel error, 16 LSB a texel, so artifacts there are pixels more \
          than half a texel off); alpha blending is measured against the blended scene's references.\n\n\
-         **Cost**: host ns/px is the median of {} whole frames, pipeline only, on this machine \
-         (noisy: compare within a table); M4 and M0 instr/px are the firmware's own workload of that \
+         **Cost**: host ns/px is the median of {} whole frames, pipeline only, on this machine, \
+         timed in turns (every setting once a turn, so a slow spell of the machine falls on all \
+         alike; still noisy across runs: compare within a table); M4 and M0 instr/px are the firmware's own workload of that \
          setting under QEMU (`reports/targets.md`, RGB565; per step for lines; the shading, texturing \
          and alpha rows quote its large-triangle workloads, the texturing ones a 16x16 texture with \
          nearest sampling at depth ratio 4, Taylor the fast Phong command that draws its colours, \
