@@ -9,6 +9,16 @@
 //! `Line` and `tiny-skia`'s antialiased hairline, whose throughput counts
 //! steps along the lines' major axes. The triangles are also drawn with all
 //! their edges antialiased (seed 003 eq. 8), counted by the same pixels.
+//!
+//! Group `large`: the firmware's large-triangle workloads (eight triangles
+//! in pairs covering a 32x32 tile, `tilerast_fw::workloads`), the same
+//! commands and tile types whose instructions per pixel
+//! `reports/targets.md` counts on the M0 and M4 — Gouraud, + Z, + Z +
+//! window ID + 8x8 dither, alpha-blended, fast Phong, textured (affine,
+//! quadratic, exact). Group `filled`: flat filled triangles, small (~3 px)
+//! and large (~1,160 px), ours against `embedded-graphics`' `Triangle` and
+//! `tiny-skia`'s path fill without antialiasing
+//! ([`tilerast_lab::frames::FillScene`]), per covered pixel.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use std::hint::black_box;
@@ -48,20 +58,79 @@ fn bench_tile<F: PixelFormat, Z: DepthMode, W: WidMode, D: Dither>(
     cmds: &[Command],
     pixels: u64,
 ) {
+    bench_config::<512, Planes<F, Z, W, D>>(c, group, name, cmds, &[], T, pixels);
+}
+
+/// Clears a `side` x `side` tile of configuration `C` and draws `cmds`
+/// (textured ones with `textures`), `pixels` elements an iteration.
+fn bench_config<const N: usize, C: TileConfig>(
+    c: &mut Criterion,
+    group: &str,
+    name: &str,
+    cmds: &[Command],
+    textures: &[Texture<'_>],
+    side: u32,
+    pixels: u64,
+) {
     let mut g = c.benchmark_group(group);
     g.throughput(Throughput::Elements(pixels));
-    let mut tile: Box<Base<F, Z, W, D>> = Box::default();
-    let area = Rect::new(0, 0, T, T);
+    let mut tile: Box<Tile<N, C>> = Box::default();
+    let area = Rect::new(0, 0, side, side);
     g.bench_function(BenchmarkId::from_parameter(name), |b| {
         b.iter(|| {
             tile.begin(area, &Clear::default()).unwrap();
             for cmd in cmds {
-                tile.draw(black_box(cmd)).unwrap();
+                tile.draw_textured(black_box(cmd), textures).unwrap();
             }
             black_box(tile.raw(0, 0))
         })
     });
     g.finish();
+}
+
+/// The firmware's large-triangle workloads, per covered pixel.
+fn large(c: &mut Criterion) {
+    use tilerast_fw::workloads::*;
+    const N: usize = groups(SIDE as u16, SIDE as u16);
+    let px = covered_pixels(&LARGE_TRIANGLE_CMDS, SIDE).expect("32x32 fits");
+    macro_rules! large {
+        ($($cfg:ty, $name:literal, $cmds:expr, $tex:expr;)*) => {
+            $(bench_config::<N, $cfg>(c, "large", $name, $cmds, $tex, SIDE, px);)*
+        };
+    }
+    large! {
+        Rgb565Format, "gouraud_rgb565", &LARGE_TRIANGLE_CMDS, &[];
+        Planes<Rgb565Format, Depth16>, "gouraud_z_rgb565", &LARGE_TRIANGLE_CMDS, &[];
+        Planes<Rgb565Format, Depth16, Wid8, Bayer8>, "gouraud_z_wid_dither8_rgb565", &LARGE_TRIANGLE_CMDS, &[];
+        BlendBench, "blend_z_rgb565", &LARGE_BLEND_CMDS, &[];
+        QuadBench, "fast_phong_z_rgb565", &LARGE_QUAD_CMDS, &[];
+        TexBench<AffineTexturing>, "tex_affine_z_rgb565", &LARGE_TEX_CMDS, &TEXTURES;
+        TexBench<QuadraticTexturing>, "tex_quadratic_z_rgb565", &LARGE_TEX_CMDS, &TEXTURES;
+        TexBench<ExactTexturing>, "tex_exact_z_rgb565", &LARGE_TEX_CMDS, &TEXTURES;
+    }
+}
+
+/// Flat filled triangles: ours, `embedded-graphics`, `tiny-skia`.
+fn filled(c: &mut Criterion) {
+    use tilerast_lab::frames::{FillScene, FILL_SIZES};
+    for (size, n, radius) in FILL_SIZES {
+        let mut s = FillScene::new(n, radius);
+        let mut g = c.benchmark_group("filled");
+        g.throughput(Throughput::Elements(s.pixels));
+        g.bench_function(
+            BenchmarkId::from_parameter(format!("{size}_ours_rgb565")),
+            |b| b.iter(|| s.ours()),
+        );
+        g.bench_function(
+            BenchmarkId::from_parameter(format!("{size}_eg_triangle_rgb565")),
+            |b| b.iter(|| s.eg()),
+        );
+        g.bench_function(
+            BenchmarkId::from_parameter(format!("{size}_tinyskia_fill_rgba8888")),
+            |b| b.iter(|| s.skia()),
+        );
+        g.finish();
+    }
 }
 
 fn raster(c: &mut Criterion) {
@@ -189,5 +258,5 @@ fn raster(c: &mut Criterion) {
     bench_tile::<Rgb565Format, NoDepth, Wid8, NoDither>(c, "fill", "flat_wid_rgb565", &fills, fpx);
 }
 
-criterion_group!(benches, raster);
+criterion_group!(benches, raster, large, filled);
 criterion_main!(benches);

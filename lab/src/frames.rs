@@ -92,89 +92,142 @@ pub struct FillTimes {
     pub skia_ns: f64,
 }
 
-/// Times `n` random triangles of about `radius` pixels.
-pub fn fills(size: &'static str, n: usize, radius: i64, runs: usize) -> FillTimes {
-    use embedded_graphics::{pixelcolor::Rgb565, prelude::*, primitives::*};
-    const S: u32 = 256;
-    let mut rng = Rng::new(0xF111_7E57 + radius as u64);
-    let tris: Vec<[(i64, i64); 3]> = (0..n)
-        .map(|_| {
-            let (cx, cy) = (
-                rng.range(radius, S as i64 - radius),
-                rng.range(radius, S as i64 - radius),
-            );
-            [(); 3].map(|_| {
-                (
-                    cx + rng.range(-radius, radius),
-                    cy + rng.range(-radius, radius),
+/// The side of [`FillScene`]'s screen.
+pub const FILL_SIDE: u32 = 256;
+
+type FillTile = Tile<{ groups(FILL_SIDE as u16, FILL_SIDE as u16) }, Rgb565Format>;
+
+/// `n` random flat white triangles of about `radius` pixels on a 256x256
+/// screen, ready to draw three ways: ours (RGB565, no Z, one tile),
+/// `embedded-graphics`' `Triangle` into the same tile as a `DrawTarget`,
+/// and `tiny-skia`'s path fill without antialiasing (RGBA8888 pixmap).
+/// [`fills`] times them here, the `raster` criterion bench too.
+pub struct FillScene {
+    /// Pixels covered, summed over the triangles (our own render of each).
+    pub pixels: u64,
+    /// Triangles.
+    pub n: usize,
+    cmds: Vec<Command>,
+    tris: Vec<[(i64, i64); 3]>,
+    tile: Box<FillTile>,
+    pixmap: tiny_skia::Pixmap,
+    paint: tiny_skia::Paint<'static>,
+    paths: Vec<tiny_skia::Path>,
+}
+
+impl FillScene {
+    /// The scene (seeded by `radius`: the same triangles every time).
+    pub fn new(n: usize, radius: i64) -> FillScene {
+        use embedded_graphics::{pixelcolor::Rgb565, prelude::*};
+        let s = FILL_SIDE as i64;
+        let mut rng = Rng::new(0xF111_7E57 + radius as u64);
+        let tris: Vec<[(i64, i64); 3]> = (0..n)
+            .map(|_| {
+                let (cx, cy) = (rng.range(radius, s - radius), rng.range(radius, s - radius));
+                [(); 3].map(|_| {
+                    (
+                        cx + rng.range(-radius, radius),
+                        cy + rng.range(-radius, radius),
+                    )
+                })
+            })
+            .collect();
+        let white = Rgb::new(255, 255, 255);
+        let cmds: Vec<Command> = tris
+            .iter()
+            .map(|t| {
+                Command::triangle(
+                    t.map(|(x, y)| Vertex::new(Coord::from_num(x), Coord::from_num(y), 0, white)),
                 )
             })
-        })
-        .collect();
-    let white = Rgb::new(255, 255, 255);
-    let cmds: Vec<Command> = tris
-        .iter()
-        .map(|t| {
-            Command::triangle(
-                t.map(|(x, y)| Vertex::new(Coord::from_num(x), Coord::from_num(y), 0, white)),
-            )
-        })
-        .collect();
-    type T = Tile<{ groups(256, 256) }, Rgb565Format>;
-    let mut tile: Box<T> = Box::default();
-    let area = Rect::new(0, 0, S, S);
-    // Covered pixels, counted from our own render of each triangle.
-    let mut px = 0u64;
-    for c in &cmds {
-        tile.begin(area, &Clear::default()).unwrap();
-        tile.draw(c).unwrap();
-        px += tile.colors().filter(|c| *c != Rgb565::BLACK).count() as u64;
-    }
-    let ours = median(runs, || {
-        tile.begin(area, &Clear::default()).unwrap();
+            .collect();
+        let mut tile: Box<FillTile> = Box::default();
+        let mut pixels = 0u64;
         for c in &cmds {
-            tile.draw(std::hint::black_box(c)).unwrap();
+            tile.begin(Self::area(), &Clear::default()).unwrap();
+            tile.draw(c).unwrap();
+            pixels += tile.colors().filter(|c| *c != Rgb565::BLACK).count() as u64;
         }
-    });
-    let style = PrimitiveStyle::with_fill(Rgb565::WHITE);
-    let eg = median(runs, || {
-        tile.begin(area, &Clear::default()).unwrap();
-        for t in &tris {
+        let mut paint = tiny_skia::Paint::default();
+        paint.set_color_rgba8(255, 255, 255, 255);
+        paint.anti_alias = false;
+        let paths = tris
+            .iter()
+            .filter_map(|t| {
+                let mut pb = tiny_skia::PathBuilder::new();
+                pb.move_to(t[0].0 as f32, t[0].1 as f32);
+                pb.line_to(t[1].0 as f32, t[1].1 as f32);
+                pb.line_to(t[2].0 as f32, t[2].1 as f32);
+                pb.close();
+                pb.finish()
+            })
+            .collect();
+        FillScene {
+            pixels,
+            n,
+            cmds,
+            tris,
+            tile,
+            pixmap: tiny_skia::Pixmap::new(FILL_SIDE, FILL_SIDE).expect("size"),
+            paint,
+            paths,
+        }
+    }
+
+    fn area() -> Rect {
+        Rect::new(0, 0, FILL_SIDE, FILL_SIDE)
+    }
+
+    /// Ours: clear the tile, draw every triangle.
+    pub fn ours(&mut self) {
+        self.tile.begin(Self::area(), &Clear::default()).unwrap();
+        for c in &self.cmds {
+            self.tile.draw(std::hint::black_box(c)).unwrap();
+        }
+    }
+
+    /// `embedded-graphics`: clear the tile, fill every `Triangle`.
+    pub fn eg(&mut self) {
+        use embedded_graphics::{pixelcolor::Rgb565, prelude::*, primitives::*};
+        let style = PrimitiveStyle::with_fill(Rgb565::WHITE);
+        self.tile.begin(Self::area(), &Clear::default()).unwrap();
+        for t in &self.tris {
             let [a, b, c] = t.map(|(x, y)| Point::new(x as i32, y as i32));
-            let _ = Triangle::new(a, b, c).into_styled(style).draw(&mut *tile);
+            let _ = Triangle::new(a, b, c)
+                .into_styled(style)
+                .draw(&mut *self.tile);
         }
-    });
-    let mut pixmap = tiny_skia::Pixmap::new(S, S).expect("size");
-    let mut paint = tiny_skia::Paint::default();
-    paint.set_color_rgba8(255, 255, 255, 255);
-    paint.anti_alias = false;
-    let paths: Vec<tiny_skia::Path> = tris
-        .iter()
-        .filter_map(|t| {
-            let mut pb = tiny_skia::PathBuilder::new();
-            pb.move_to(t[0].0 as f32, t[0].1 as f32);
-            pb.line_to(t[1].0 as f32, t[1].1 as f32);
-            pb.line_to(t[2].0 as f32, t[2].1 as f32);
-            pb.close();
-            pb.finish()
-        })
-        .collect();
-    let skia = median(runs, || {
-        pixmap.fill(tiny_skia::Color::BLACK);
-        for p in &paths {
-            pixmap.fill_path(
-                p,
-                &paint,
+    }
+
+    /// `tiny-skia`: clear the pixmap, fill every path (no antialiasing).
+    pub fn skia(&mut self) {
+        self.pixmap.fill(tiny_skia::Color::BLACK);
+        for p in &self.paths {
+            self.pixmap.fill_path(
+                std::hint::black_box(p),
+                &self.paint,
                 tiny_skia::FillRule::Winding,
                 tiny_skia::Transform::identity(),
                 None,
             );
         }
-    });
-    let per = |t: f64| t * 1e9 / px as f64;
+    }
+}
+
+/// The two size classes [`FillScene`] is measured at: name, triangles,
+/// radius (about 3 and 1,160 pixels a triangle).
+pub const FILL_SIZES: [(&str, usize, i64); 2] = [("small", 4000, 3), ("large", 200, 60)];
+
+/// Times `n` random triangles of about `radius` pixels ([`FillScene`]).
+pub fn fills(size: &'static str, n: usize, radius: i64, runs: usize) -> FillTimes {
+    let mut s = FillScene::new(n, radius);
+    let ours = median(runs, || s.ours());
+    let eg = median(runs, || s.eg());
+    let skia = median(runs, || s.skia());
+    let per = |t: f64| t * 1e9 / s.pixels as f64;
     FillTimes {
         size,
-        pixels_each: px as f64 / n as f64,
+        pixels_each: s.pixels as f64 / n as f64,
         ours_ns: per(ours),
         eg_ns: per(eg),
         skia_ns: per(skia),
@@ -212,7 +265,7 @@ pub fn report(
            `fill_path`, anti-alias off, RGBA8888 pixmap.\n\n\
            | triangles | px each | ours | embedded-graphics | tiny-skia | e-g / ours | tiny-skia / ours |\n\
            | --- | ---: | ---: | ---: | ---: | ---: | ---: |\n";
-    for f in [fills("small", 4000, 3, runs), fills("large", 200, 60, runs)] {
+    for f in FILL_SIZES.map(|(size, n, r)| fills(size, n, r, runs)) {
         md += &format!(
             "| {} | {:.0} | {:.2} | {:.2} | {:.2} | {:.2}x | {:.2}x |\n",
             f.size,

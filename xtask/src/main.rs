@@ -293,7 +293,7 @@ fn bench() -> Result<(), String> {
     )?;
     let root = std::path::Path::new("target/criterion");
     let mut rows = vec![];
-    for group in ["triangles", "fill", "lines"] {
+    for group in ["triangles", "fill", "lines", "large", "filled"] {
         let dir = root.join(group);
         let mut names: Vec<_> = std::fs::read_dir(&dir)
             .map_err(|e| format!("{}: {e}", dir.display()))?
@@ -344,7 +344,7 @@ fn bench() -> Result<(), String> {
             ns / base
         );
     }
-    md += "\nElements are pixels for triangles and fills, steps along the major axis for lines.\n";
+    md += "\nElements are pixels for triangles and fills (covered pixels for the `large` workloads and `filled` triangles), steps along the major axis for lines.\n";
     std::fs::create_dir_all("reports").map_err(|e| e.to_string())?;
     std::fs::write("reports/bench.md", &md).map_err(|e| e.to_string())?;
     println!("{md}");
