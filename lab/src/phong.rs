@@ -362,7 +362,11 @@ pub fn sphere_scene(
     specular: bool,
 ) -> Result<(tilerast_sim::obj::Obj, MeshSpec), String> {
     let limits = tilerast_sim::Limits::default();
-    let dir = std::env::temp_dir().join(format!("tilerast-phong-{}-{slices}", std::process::id()));
+    // A folder of its own per call: tests in one process may build
+    // spheres at once.
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!("tilerast-phong-{}-{call}", std::process::id()));
     std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
     let (o, m) = sphere(slices);
     let obj = std::fs::write(dir.join("sphere.mtl"), m)

@@ -743,145 +743,102 @@ fn coverage_traffic(s: &Subject, k: AaKind) -> u64 {
 }
 
 /// Measures one setting on one subject.
-/// A setting drawn: the frame (timed when asked), its traffic, and
-/// whether its artifact count means something.
-struct Drawn {
-    r: Rendered,
-    traffic: Option<u64>,
-    artifacts_meaningful: bool,
-}
-
 /// Draws one setting on one subject, timing `runs` renders first.
-fn draw(s: &Subject, set: Setting, runs: usize) -> Result<Drawn, String> {
+fn draw(s: &Subject, set: Setting, runs: usize) -> Result<Rendered, String> {
     let base = s.cfg;
     let err = |e: Error| format!("{} / {}: {e:?}", s.name, set.label());
-    let mut artifacts_meaningful = true;
-    let (r, traffic) = match set {
-        Setting::Colour(c, false) => (
-            colour_bits::<Rgb888Format, NoDither>(c, &base, &s.cmds, runs),
-            Some(aliased_traffic(&s.cmds, &s.cfg, FormatKind::Rgb888, 2)),
-        ),
-        Setting::Colour(c, true) => {
-            artifacts_meaningful = false;
-            (
-                colour_bits::<Rgb565Format, Bayer8>(c, &base, &s.cmds, runs),
-                Some(aliased_traffic(&s.cmds, &s.cfg, FormatKind::Rgb565, 2)),
-            )
-        }
-        Setting::Depth(b, z) => (
-            depth_bits(b, z, &base, &s.cmds, runs),
-            Some(aliased_traffic(
-                &s.cmds,
-                &s.cfg,
-                FormatKind::Rgb888,
-                b as u64 / 8,
-            )),
-        ),
-        Setting::Subpixel(bits) => (
-            render_timed(&base, &snapped(&s.cmds, bits), runs),
-            Some(aliased_traffic(&s.cmds, &s.cfg, FormatKind::Rgb888, 2)),
-        ),
+    let r = match set {
+        Setting::Colour(c, false) => colour_bits::<Rgb888Format, NoDither>(c, &base, &s.cmds, runs),
+        Setting::Colour(c, true) => colour_bits::<Rgb565Format, Bayer8>(c, &base, &s.cmds, runs),
+        Setting::Depth(b, z) => depth_bits(b, z, &base, &s.cmds, runs),
+        Setting::Subpixel(bits) => render_timed(&base, &snapped(&s.cmds, bits), runs),
         Setting::Dither(f, d) => {
-            artifacts_meaningful = false;
             let cfg = Config {
                 format: f,
                 dither: d,
                 ..base
             };
-            (
-                render_timed(&cfg, &s.cmds, runs),
-                Some(aliased_traffic(&s.cmds, &s.cfg, f, 2)),
-            )
+            render_timed(&cfg, &s.cmds, runs)
         }
         Setting::Aa(k, edge) => {
-            artifacts_meaningful = false;
             let cfg = Config { aa: k, ..base };
-            if edge {
-                (
-                    render_timed(&cfg, &s.edges, runs),
-                    Some(aliased_traffic(&s.edges, &s.cfg, FormatKind::Rgb888, 2)),
-                )
-            } else if k == AaKind::None {
-                (
-                    render_timed(&cfg, &s.cmds, runs),
-                    Some(aliased_traffic(&s.cmds, &s.cfg, FormatKind::Rgb888, 2)),
-                )
-            } else if k == AaKind::Area {
-                // Area sampling reads and writes the same silhouette pixels
-                // as edge AA: its traffic model is the edges'.
-                (
-                    render_timed(&cfg, &s.cmds, runs),
-                    Some(aliased_traffic(&s.edges, &s.cfg, FormatKind::Rgb888, 2)),
-                )
-            } else {
-                (
-                    render_timed(&cfg, &s.cmds, runs),
-                    Some(coverage_traffic(s, k)),
-                )
-            }
+            render_timed(&cfg, if edge { &s.edges } else { &s.cmds }, runs)
         }
         Setting::Line(f, wu) => {
-            artifacts_meaningful = false;
             let cfg = Config { format: f, ..base };
-            (render_timed(&cfg, &with_line_aa(&s.cmds, wu), runs), None)
+            render_timed(&cfg, &with_line_aa(&s.cmds, wu), runs)
         }
-        Setting::Geometry(_) | Setting::Shading(_) => {
-            let cmds = s.cmds_of(set);
-            // The replay counts triangles: the quadratic commands of the
-            // shading methods cover the Gouraud list's fragments.
-            let covered = if matches!(set, Setting::Shading(_)) {
-                &s.cmds
-            } else {
-                cmds
-            };
-            (
-                render_timed(&base, cmds, runs),
-                Some(aliased_traffic(covered, &s.cfg, FormatKind::Rgb888, 2)),
-            )
-        }
+        Setting::Geometry(_) | Setting::Shading(_) => render_timed(&base, s.cmds_of(set), runs),
         Setting::Texture(kind) => {
             let ramp_texels = ramp_texels();
-            // The texture's reads come on top of the aliased pipeline's.
-            (
-                render_textured(&base, &s.cmds, &[ramp(&ramp_texels)], kind, runs),
-                None,
-            )
+            render_textured(&base, &s.cmds, &[ramp(&ramp_texels)], kind, runs)
         }
-        Setting::Alpha(blend) => {
-            let cmds: Vec<Command> = if blend {
-                s.cmds.clone()
-            } else {
-                s.cmds
-                    .iter()
-                    .map(|c| {
-                        let mut c = *c;
-                        if let Some(st) = c.state_mut() {
-                            st.blend = Blend::Opaque;
-                        }
-                        c
-                    })
-                    .collect()
-            };
-            // The replay does not blend (a blend reads the colour and
-            // writes no Z): no traffic figure.
-            (render_timed(&base, &cmds, runs), None)
+        Setting::Alpha(true) => render_timed(&base, &s.cmds, runs),
+        Setting::Alpha(false) => {
+            let opaque: Vec<Command> = s
+                .cmds
+                .iter()
+                .map(|c| {
+                    let mut c = *c;
+                    if let Some(st) = c.state_mut() {
+                        st.blend = Blend::Opaque;
+                    }
+                    c
+                })
+                .collect();
+            render_timed(&base, &opaque, runs)
         }
     };
-    Ok(Drawn {
-        r: r.map_err(err)?,
-        traffic,
-        artifacts_meaningful,
-    })
+    r.map_err(err)
+}
+
+/// Bytes read and written per frame by one setting on one subject, where
+/// the replay models it.
+fn traffic(s: &Subject, set: Setting) -> Option<u64> {
+    let rgb888 = |cmds: &[Command]| aliased_traffic(cmds, &s.cfg, FormatKind::Rgb888, 2);
+    match set {
+        Setting::Colour(_, dither) => Some(aliased_traffic(
+            &s.cmds,
+            &s.cfg,
+            if dither {
+                FormatKind::Rgb565
+            } else {
+                FormatKind::Rgb888
+            },
+            2,
+        )),
+        Setting::Depth(b, _) => Some(aliased_traffic(
+            &s.cmds,
+            &s.cfg,
+            FormatKind::Rgb888,
+            b as u64 / 8,
+        )),
+        Setting::Subpixel(_) => Some(rgb888(&s.cmds)),
+        Setting::Dither(f, _) => Some(aliased_traffic(&s.cmds, &s.cfg, f, 2)),
+        // Area sampling reads and writes the same silhouette pixels as
+        // edge AA: its traffic model is the edges'.
+        Setting::Aa(AaKind::None, true) | Setting::Aa(AaKind::Area, _) => Some(rgb888(&s.edges)),
+        Setting::Aa(AaKind::None, false) => Some(rgb888(&s.cmds)),
+        Setting::Aa(k, _) => Some(coverage_traffic(s, k)),
+        Setting::Geometry(_) => Some(rgb888(s.cmds_of(set))),
+        // The replay counts triangles: the quadratic commands of the
+        // shading methods cover the Gouraud list's fragments.
+        Setting::Shading(_) => Some(rgb888(&s.cmds)),
+        // Not modelled: the replay has no texel reads, and does not blend
+        // (a blend reads the colour and writes no Z).
+        Setting::Line(..) | Setting::Texture(_) | Setting::Alpha(_) => None,
+    }
 }
 
 /// Measures one setting on one subject, all but its host time
 /// ([`run`] times the settings in turns).
 fn measure(s: &Subject, set: Setting, fw: &[(String, f64, Option<f64>)]) -> Result<Point, String> {
-    let Drawn {
-        r,
-        traffic,
-        artifacts_meaningful,
-    } = draw(s, set, 0)?;
+    let r = draw(s, set, 0)?;
+    // In families whose coverage is the reference's.
+    let artifacts_meaningful = !matches!(
+        set,
+        Setting::Colour(_, true) | Setting::Dither(..) | Setting::Aa(..) | Setting::Line(..)
+    );
     let texels = matches!(set, Setting::Texture(_)).then(|| texel_error(&r, &s.centre).max);
     let centre = compare(&r.image, &s.centre_img).map_err(|e| e.to_string())?;
     let artifacts = artifacts_meaningful.then(|| {
@@ -918,7 +875,7 @@ fn measure(s: &Subject, set: Setting, fw: &[(String, f64, Option<f64>)]) -> Resu
         ns_px: f64::NAN,
         ns_vertex: s.variants.iter().find(|v| v.0 == set).and_then(|v| v.2),
         bytes_px: r.bits_per_pixel as f64 / 8.0,
-        traffic,
+        traffic: traffic(s, set),
         m4: fw_row.map(|r| r.1),
         m0: fw_row.and_then(|r| r.2),
         texels,
@@ -1171,7 +1128,7 @@ pub fn run(opt: &Options) -> Result<Vec<Point>, String> {
     for turn in 0..opt.runs {
         bar.set_message(format!("timing, turn {} of {}", turn + 1, opt.runs));
         for ((s, set), t) in plan.iter().zip(&mut times) {
-            let ns = draw(&subjects[*s], *set, 1)?.r.ns_per_pixel;
+            let ns = draw(&subjects[*s], *set, 1)?.ns_per_pixel;
             t.push(ns.unwrap_or(f64::NAN));
             bar.inc(1);
         }
