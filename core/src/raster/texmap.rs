@@ -289,9 +289,13 @@ impl TexSetup {
         self.weights(e[0] + step(self.a[0]), e[1] + step(self.a[1]))
     }
 
-    /// The span state at the tile's first pixel `x0` of `row`.
+    /// The span state at the tile's first pixel `x0` of `row`, written
+    /// over `s`: built in place, not returned (on the Cortex-M0, where
+    /// [`Self::segment`] is out of line and so the state lives in memory,
+    /// a returned span was copied once more per span through `memcpy`:
+    /// 119 instructions a span of the quadratic workload, profiled).
     #[inline(always)]
-    pub(crate) fn span<const MODE: u8>(&self, row: &Row, x0: i64) -> TexSpan {
+    pub(crate) fn span<const MODE: u8>(&self, row: &Row, x0: i64, s: &mut TexSpan) {
         let n = row.xe - 1 - row.xr;
         let k = x0 - row.xr;
         let e = [row.e1, row.e2];
@@ -305,7 +309,7 @@ impl TexSetup {
         };
         let l0 = ((self.f0[L] << 16) + self.lerp(L, w0, 14)) as i32;
         let dl = self.dl;
-        let mut s = TexSpan {
+        *s = TexSpan {
             px: TexStep {
                 l: l0.wrapping_add(dl.wrapping_mul(k as i32)),
                 dl,
@@ -330,10 +334,10 @@ impl TexSetup {
                 // The segments from the grid column before `k` on, as a
                 // tile entering there would have loaded them (a segment
                 // may have been split): the same integers in every tile.
-                self.segment(&mut s, first);
+                self.segment(s, first);
                 while s.left != i32::MAX && s.next <= k {
                     first = s.next;
-                    self.segment(&mut s, first);
+                    self.segment(s, first);
                 }
                 advance(&mut s.px.u, k - first);
                 advance(&mut s.px.v, k - first);
@@ -350,7 +354,6 @@ impl TexSetup {
                 advance(&mut s.px.v, k as i32);
             }
         }
-        s
     }
 
     /// Loads the quadratic segment starting `first` pixels into the span,

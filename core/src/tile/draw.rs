@@ -22,7 +22,7 @@ use crate::numeric::{Precision, SUBPIXEL as SUBPIXEL_I64, Z_FRAC};
 use crate::raster::area::{AreaSetup, Cover, Cursor};
 use crate::raster::coverage::{AaMode, AaPlane};
 use crate::raster::span::{quantize_color, quantize_z, SpanStart};
-use crate::raster::texmap::{self, TexSetup};
+use crate::raster::texmap::{self, TexSetup, TexSpan};
 use crate::raster::traverse::{Row, Spans};
 use crate::setup::{alpha_weight, fits_box, fits_i32, EdgeInt, QuadPlane, TriangleSetup};
 use crate::texture::{
@@ -319,12 +319,13 @@ where
         let bias = round_bias::<D>();
         let starts = RowStarts::new::<P, T>(t);
         let area = self.area;
+        let mut sp = TexSpan::default();
         for row in Spans::new(&t.e, &t.bounds, &area) {
             let (start, a) = starts.at::<P, BLEND, T>(t, &row);
             let tile = &mut *self;
             let r = area;
             let first = ((row.py - r.y as i64) * r.w as i64 + (row.x0 - r.x as i64)) as usize;
-            let mut sp = ts.span::<MODE>(&row, row.x0);
+            ts.span::<MODE>(&row, row.x0, &mut sp);
             let (mut z, mut a) = (start.z + (1 << (Z_FRAC - 1)), a.wrapping_add(1 << 15));
             let (mut x, mut idx) = (row.x0 as u32, first);
             let mut n = (row.x1 - row.x0) as usize;
