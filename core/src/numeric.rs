@@ -272,6 +272,11 @@ pub(crate) fn div_round_pair(a: i64, b: i64, d: i64) -> (i64, i64) {
 /// Cortex-M0) has only the low half ([`wide_mul`]).
 pub(crate) const LONG_MUL: bool = !cfg!(target_arch = "arm") || HW_DIV32;
 
+/// Whether the core counts leading zeros in one instruction (`clz`: every
+/// core but ARMv6-M, the Cortex-M0, whose `leading_zeros` is a library
+/// call).
+pub(crate) const HW_CLZ: bool = LONG_MUL;
+
 /// `a b`, all 64 bits: one `umull` where the core has it ([`LONG_MUL`]);
 /// on the Cortex-M0 four 16x16-bit products ([`wide_mul_pieces`]) instead
 /// of the general 64x64-bit library multiply (`__aeabi_lmul`, ~40

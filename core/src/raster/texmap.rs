@@ -56,7 +56,9 @@
 //! the quotients are the same integers on every chip.
 
 use crate::format::Lanes;
-use crate::numeric::{div_round_pair, mul_small, pairs, wide_mul, Divisor, LONG_MUL, W_FRAC};
+use crate::numeric::{
+    div_round_pair, mul_small, pairs, wide_mul, Divisor, HW_CLZ, LONG_MUL, W_FRAC,
+};
 use crate::raster::traverse::Row;
 use crate::setup::{EdgeInt, TriangleSetup};
 use crate::texture::{TexVertex, PERSPECTIVE_EXACT, PERSPECTIVE_QUADRATIC};
@@ -359,11 +361,11 @@ impl TexSetup {
     /// Loads the quadratic segment starting `first` pixels into the span,
     /// whose exact start coordinates are `s.end`; past the span's last
     /// pixel, nothing (the loop is done).
-    // Inlined where flash is plenty (the Cortex-M4: the quadratic
-    // workload 20,544 -> 19,024 ticks, the span state no longer escapes),
-    // one copy on the soft-float Cortex-M0, whose flash is full.
-    #[cfg_attr(target_abi = "eabi", inline(never))]
-    #[cfg_attr(not(target_abi = "eabi"), inline(always))]
+    // Inlined (the Cortex-M4's quadratic workload 20,544 -> 19,024 ticks,
+    // the span state no longer escapes; the Cortex-M0's 26,476 -> 26,024,
+    // 12 KB more flash in the micro:bit build that has the texturing
+    // workloads, none in its scenes' build, which does not texture).
+    #[inline(always)]
     fn segment(&self, s: &mut TexSpan, first: i32) {
         let seg = SEGMENT as i32;
         let mut m = (seg - ((first + s.phase) & (seg - 1))).min(s.n - first);
@@ -456,9 +458,9 @@ impl Knots {
 /// texel after `k` steps, 2^-9 over a whole segment. Before: one 64-bit
 /// rounding of `(2 c + m (D - 2 c)) / m^2` from the 32.32 values, 177
 /// instructions a segment for the two coordinates on the M4 (profiled).
-// Inlined where flash is plenty (the Cortex-M4); the compiler's choice on
-// the Cortex-M0.
-#[cfg_attr(not(target_abi = "eabi"), inline(always))]
+/// Inlined on the Cortex-M0 too (its quadratic workload 26,024 -> 25,350
+/// ticks; out of line, each call paid 147 instructions).
+#[inline(always)]
 fn steps(a: i32, c: i32, e: i32, m: i32) -> [i32; 3] {
     // `|e - a| < 2^30`: the coordinates lie in `0..2^30`.
     let big_d = e - a;
@@ -502,13 +504,48 @@ fn between(p0: [i32; 2], q0: u32, p1: [i32; 2], q1: u32, k2: u32, m2: u32) -> [i
     // Both below 2^31.
     let num = k2 * q1;
     let den = num + (m2 - k2) * q0;
-    let cut = (32 - den.leading_zeros()).saturating_sub(16);
+    let cut = over_16(den);
     // `num <= den`: the weight is at most 2^16, kept below it so that the
     // products below take the 16-bit multiplier.
     let w = ((num >> cut) << 16) / (den >> cut);
     let w = w.min(0xffff);
     let lerp = |a: i32, b: i32| a + (mul_small(b as i64 - a as i64, w) >> 16) as i32;
     [lerp(p0[0], p1[0]), lerp(p0[1], p1[1])]
+}
+
+/// How far `x` shifts right to fit 16 bits,
+/// `(32 - x.leading_zeros()).saturating_sub(16)`: one `clz` where the core
+/// has it ([`HW_CLZ`]); the Cortex-M0 has none (a library call of about 55
+/// instructions, once per segment), so there four compares.
+#[inline(always)]
+fn over_16(x: u32) -> u32 {
+    over_16_by::<HW_CLZ>(x)
+}
+
+#[inline(always)]
+fn over_16_by<const CLZ: bool>(x: u32) -> u32 {
+    if CLZ {
+        return (32 - x.leading_zeros()).saturating_sub(16);
+    }
+    // Unrolled by hand: the micro:bit builds for size.
+    let (mut y, mut c) = (x >> 16, 0);
+    if y >= 1 << 8 {
+        y >>= 8;
+        c += 8;
+    }
+    if y >= 1 << 4 {
+        y >>= 4;
+        c += 4;
+    }
+    if y >= 1 << 2 {
+        y >>= 2;
+        c += 2;
+    }
+    if y >= 1 << 1 {
+        y >>= 1;
+        c += 1;
+    }
+    c + y
 }
 
 /// The shortest segment a split leaves, pixels.
@@ -613,7 +650,7 @@ pub(crate) fn coords<const MODE: u8>(ts: &TexSetup, s: &TexStep) -> (i64, i64) {
 
 #[cfg(test)]
 mod tests {
-    use super::{between, to_step, too_curved, Knots};
+    use super::{between, over_16_by, to_step, too_curved, Knots};
 
     /// [`between`] is the exact perspective point, `k / m` of the way in
     /// screen space from `a` (where `q` is `q0`) to `e` (`q1`), within its
@@ -642,6 +679,29 @@ mod tests {
                 (got as f64 - want).abs() <= bound,
                 "{a} {e} q {q0} {q1} {k2}/{m2}: {got} vs {want}"
             );
+        }
+    }
+
+    #[test]
+    fn over_16_is_the_same_on_both_routes() {
+        let check = |x: u32| {
+            let want = (32 - x.leading_zeros()).saturating_sub(16);
+            assert_eq!(over_16_by::<false>(x), want, "{x:#x}");
+            assert_eq!(over_16_by::<true>(x), want, "{x:#x}");
+        };
+        for x in [0, 1, u32::MAX] {
+            check(x);
+        }
+        for b in 0..32 {
+            let p = 1u32 << b;
+            for x in [p - 1, p, p + 1, p | (p >> 1)] {
+                check(x);
+            }
+        }
+        let mut r = crate::numeric::xorshift(0x0c1e_a5ed);
+        for _ in 0..10_000 {
+            let x = r();
+            check((x >> (x % 33)) as u32);
         }
     }
 
