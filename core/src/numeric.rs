@@ -251,20 +251,142 @@ fn small_quotient(m: u32, d: u32) -> u32 {
 /// for `|a|, |b| < 2^62` and `d > 0`: two quotients by one divisor, each
 /// by the fastest exact route the chip has. A 64-bit host divides; a chip
 /// that divides 32-bit integers in hardware (ARMv7-M and up) takes
-/// [`div_floor_u24`] when `d < 2^24` and both are non-negative; otherwise
-/// (the Cortex-M0, whose every division is a library call) one reciprocal
-/// serves both.
+/// [`div_floor_u24`] when `d < 2^24` and both are non-negative; the
+/// Cortex-M0, whose every division is a library call, takes
+/// [`div_floor_bytes`] for a divisor in `256..2^24` and quotients below
+/// 2^40 (a perspective sample's `q` and its texel coordinates), otherwise
+/// one reciprocal ([`Divisor`]) serves both.
 #[inline(always)]
 pub(crate) fn div_round_pair(a: i64, b: i64, d: i64) -> (i64, i64) {
-    if cfg!(target_pointer_width = "64") {
-        (div_round(a, d), div_round(b, d))
-    } else if HW_DIV32 && d < 1 << 24 && a >= 0 && b >= 0 {
-        let q = |n: i64| div_floor_u24((n + d / 2) as u64, d as u32) as i64;
-        (q(a), q(b))
-    } else {
-        let r = Divisor::new(d);
-        (r.round(a), r.round(b))
+    div_round_pair_by::<{ cfg!(target_pointer_width = "64") }, HW_DIV32>(a, b, d)
+}
+
+/// [`div_round_pair`] by the host's division (`WIDE`), the division
+/// instruction's route (`DIV32`) or the Cortex-M0's (neither): the tests
+/// run every route on the host.
+#[inline(always)]
+fn div_round_pair_by<const WIDE: bool, const DIV32: bool>(a: i64, b: i64, d: i64) -> (i64, i64) {
+    if WIDE {
+        return (div_round(a, d), div_round(b, d));
     }
+    let small = d < 1 << 24 && a >= 0 && b >= 0;
+    if DIV32 && small {
+        let q = |n: i64| div_floor_u24((n + d / 2) as u64, d as u32) as i64;
+        return (q(a), q(b));
+    }
+    if !DIV32 && small && d >= 1 << 8 {
+        // Both quotients inline (a closure called twice was a function of
+        // its own at the micro:bit's `opt-level = "s"`).
+        let (d32, half) = (d as u32, d / 2);
+        let rho = recip9(d32);
+        let qa = div_floor_bytes((a + half) as u64, d32, rho);
+        let qb = div_floor_bytes((b + half) as u64, d32, rho);
+        if let (Some(qa), Some(qb)) = (qa, qb) {
+            return (qa as i64, qb as i64);
+        }
+    }
+    let r = Divisor::new(d);
+    (r.round(a), r.round(b))
+}
+
+/// `floor(2^32 / (t + 1))` for the nine top bits `t` of a divisor
+/// (`256..512`): [`recip9`]'s table, 1 KB of flash where it is used.
+const RECIP9: [u32; 256] = {
+    let mut t = [0u32; 256];
+    let mut i = 0;
+    while i < 256 {
+        t[i] = ((1u64 << 32) / (i as u64 + 257)) as u32;
+        i += 1;
+    }
+    t
+};
+
+/// A lower bound of `2^32 / d` within a factor `256/257`, for `d` in
+/// `256..2^24`, from its nine top bits `t` (`d = t 2^s + low`, `low <
+/// 2^s`): `floor(2^32 / (t + 1)) >> s`, below `2^32 / d` because
+/// `d < (t + 1) 2^s`. No division: the Cortex-M0 has none (a library call
+/// of about 165 instructions for the exact reciprocal).
+#[inline(always)]
+fn recip9(d: u32) -> u32 {
+    debug_assert!((1 << 8..1 << 24).contains(&d));
+    // The shift that leaves nine bits, by compares (no `clz` on the M0).
+    let mut s = 0;
+    if d >= 1 << 16 {
+        s += 8;
+    }
+    if d >> s >= 1 << 12 {
+        s += 4;
+    }
+    if d >> s >= 1 << 10 {
+        s += 2;
+    }
+    if d >> s >= 1 << 9 {
+        s += 1;
+    }
+    RECIP9[(d >> s) as usize - 256] >> s
+}
+
+/// `floor(n / d)` for `d` in `256..2^24` and `n / d < 2^40` (`None`
+/// otherwise: `n >> 40` reaches `d`), with `rho` from [`recip9`]: five
+/// 8-bit digits, each estimated from the remainder `r < d` alone as `r rho
+/// 2^-24` — one 32-bit product, below 2^32 since `rho < 2^32 / d` — which
+/// is at most 3 below the digit (the bound's 1/257, the floors, the
+/// incoming byte; 2 at most over 300,000 random digits, worst remainders
+/// included), then corrected up while the remainder, exact in 32
+/// bits, reaches `d`. Exact for every input: the estimate never exceeds
+/// the digit, and each correction keeps `remainder = dividend - digit d`.
+/// On the Cortex-M0 about 20 instructions a digit, against 35 for the
+/// reciprocal's 32x32-bit high product ([`Divisor`]'s digits).
+#[inline(always)]
+fn div_floor_bytes(n: u64, d: u32, rho: u32) -> Option<u64> {
+    let (hi, lo) = ((n >> 32) as u32, n as u32);
+    let r = hi >> 8;
+    if r >= d {
+        return None;
+    }
+    let (top, r) = byte_digit(r, hi & 0xff, d, rho);
+    let (g3, r) = byte_digit(r, lo >> 24, d, rho);
+    let (g2, r) = byte_digit(r, (lo >> 16) & 0xff, d, rho);
+    let (g1, r) = byte_digit(r, (lo >> 8) & 0xff, d, rho);
+    let (g0, _) = byte_digit(r, lo & 0xff, d, rho);
+    let low = (g3 << 24) | (g2 << 16) | (g1 << 8) | g0;
+    Some(((top as u64) << 32) | low as u64)
+}
+
+/// One digit of [`div_floor_bytes`]: `floor((r 2^8 + byte) / d)` and the
+/// remainder, for `r < d`, `byte < 2^8`, `rho` from [`recip9`].
+#[inline(always)]
+fn byte_digit(r: u32, byte: u32, d: u32, rho: u32) -> (u32, u32) {
+    let x = (r << 8) | byte;
+    let mut g = r.wrapping_mul(rho) >> 24;
+    let mut rem = x.wrapping_sub(g.wrapping_mul(d));
+    while rem >= d {
+        rem -= d;
+        g += 1;
+    }
+    (g, rem)
+}
+
+/// `floor(num 2^16 / den)` for `num < den < 2^16`: a weight with 16
+/// fraction bits (a quadratic segment's perspective middle). One division
+/// where the chip has one; on the Cortex-M0 two byte digits
+/// ([`div_floor_bytes`]) for `den >= 256` instead of the library division
+/// (about 165 instructions).
+#[inline(always)]
+pub(crate) fn div_shl16(num: u32, den: u32) -> u32 {
+    div_shl16_by::<HW_DIV32>(num, den)
+}
+
+#[inline(always)]
+fn div_shl16_by<const DIV32: bool>(num: u32, den: u32) -> u32 {
+    debug_assert!(num < den && den < 1 << 16);
+    if DIV32 || den < 1 << 8 {
+        return (num << 16) / den;
+    }
+    let rho = recip9(den);
+    let (g1, r) = byte_digit(num, 0, den, rho);
+    let (g0, _) = byte_digit(r, 0, den, rho);
+    (g1 << 8) | g0
 }
 
 /// Whether the core multiplies two 32-bit integers into 64 bits in one
@@ -737,6 +859,19 @@ mod tests {
             let q = div_floor_u24((n + d / 2) as u64, d as u32) as i64;
             assert_eq!(q, div_round(n, d));
             assert_eq!(div_round_pair(n, -n, d), (q, div_round(-n, d)));
+            for (a, b) in [(n, -n), (n, n >> 20), (n >> 30, n >> 10)] {
+                let want = (div_round(a, d), div_round(b, d));
+                assert_eq!(
+                    div_round_pair_by::<false, false>(a, b, d),
+                    want,
+                    "{a} {b} / {d}"
+                );
+                assert_eq!(
+                    div_round_pair_by::<false, true>(a, b, d),
+                    want,
+                    "{a} {b} / {d}"
+                );
+            }
             assert_eq!(Divisor::new(d).round(n), q);
             for recip32 in [false, true] {
                 let by = Divisor::new_by(d, true, recip32);
@@ -751,6 +886,61 @@ mod tests {
             div_floor_u24(u64::MAX, (1 << 24) - 1),
             u64::MAX / ((1 << 24) - 1)
         );
+    }
+
+    /// The Cortex-M0's byte digits: every divisor width's bound from
+    /// [`recip9`] and every quotient size up to its limit, with the worst
+    /// remainders (`d - 1`) and the edges.
+    #[test]
+    fn byte_digits_are_exact() {
+        let mut x = xorshift(0x5eed_b17e_d161_7a1b);
+        for i in 0..300_000u32 {
+            let r = x();
+            let d = match i % 3 {
+                0 => (256 + (r as u32 % ((1 << 24) - 256))).max(256),
+                1 => (1 << (8 + i % 16)) + (r >> 40) as u32 % (1 << (8 + i % 16)),
+                _ => ((1 << 24) - 1 - (r as u32 & 0xfff)).max(256),
+            }
+            .min((1 << 24) - 1);
+            let rho = recip9(d);
+            assert!((rho as u64) * d as u64 <= 1 << 32, "{d} {rho}");
+            assert!((rho as u64 + 1) * 257 * d as u64 >= 256 << 32, "{d} {rho}");
+            let q = x() >> (24 + i % 40);
+            let n = q * d as u64 + [0, d as u64 - 1, x() % d as u64][i as usize % 3];
+            if n >> 40 >= d as u64 {
+                assert_eq!(div_floor_bytes(n, d, rho), None);
+            } else {
+                assert_eq!(div_floor_bytes(n, d, rho), Some(n / d as u64), "{n} / {d}");
+            }
+        }
+        for d in [256u32, 257, 511, 512, 65535, 65536, (1 << 24) - 1] {
+            let top = ((d as u64) << 40) - 1;
+            assert_eq!(div_floor_bytes(top, d, recip9(d)), Some(top / d as u64));
+            assert_eq!(div_floor_bytes(top + 1, d, recip9(d)), None);
+            assert_eq!(div_floor_bytes(0, d, recip9(d)), Some(0));
+        }
+    }
+
+    #[test]
+    fn the_weight_division_is_exact_on_both_routes() {
+        let mut x = xorshift(0x3c6e_f372_fe94_f82b);
+        for i in 0..300_000u32 {
+            let r = x();
+            let den = match i % 3 {
+                0 => 1 + (r as u32 % 0xffff),
+                1 => 0xffff - (r as u32 & 0xff),
+                _ => (1 << (i % 16)) + (r as u32 % (1 << (i % 16))),
+            }
+            .clamp(1, 0xffff);
+            let num = [0, den - 1, (r >> 32) as u32 % den][i as usize % 3];
+            let want = ((num as u64) << 16) / den as u64;
+            assert_eq!(
+                div_shl16_by::<false>(num, den) as u64,
+                want,
+                "{num} / {den}"
+            );
+            assert_eq!(div_shl16_by::<true>(num, den) as u64, want, "{num} / {den}");
+        }
     }
 
     #[test]
