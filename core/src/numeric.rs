@@ -369,12 +369,12 @@ fn byte_digit(r: u32, byte: u32, d: u32, rho: u32) -> (u32, u32) {
 
 /// `floor(num 2^16 / den)` for `num < den < 2^16`: a weight with 16
 /// fraction bits (a quadratic segment's perspective middle). One division
-/// where the chip has one; on the Cortex-M0 two byte digits
-/// ([`div_floor_bytes`]) for `den >= 256` instead of the library division
-/// (about 165 instructions).
+/// where the chip has one (and on a host); on the Cortex-M0 two byte
+/// digits ([`div_floor_bytes`]) for `den >= 256` instead of the library
+/// division (about 165 instructions).
 #[inline(always)]
 pub(crate) fn div_shl16(num: u32, den: u32) -> u32 {
-    div_shl16_by::<HW_DIV32>(num, den)
+    div_shl16_by::<{ HW_DIV32 || !cfg!(target_arch = "arm") }>(num, den)
 }
 
 #[inline(always)]
