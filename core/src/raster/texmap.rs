@@ -296,10 +296,10 @@ impl TexSetup {
     }
 
     /// The span state at the tile's first pixel `x0` of `row`, written
-    /// over `s`: built in place, not returned (on the Cortex-M0, where
-    /// [`Self::segment`] is out of line and so the state lives in memory,
-    /// a returned span was copied once more per span through `memcpy`:
-    /// 119 instructions a span of the quadratic workload, profiled).
+    /// over `s`: built in place, not returned (on the Cortex-M0, with
+    /// [`Self::segment`] out of line, a returned span was copied once more
+    /// per span through `memcpy`: 119 instructions a span of the quadratic
+    /// workload, profiled).
     #[inline(always)]
     pub(crate) fn span<const MODE: u8>(&self, row: &Row, x0: i64, s: &mut TexSpan) {
         let n = row.xe - 1 - row.xr;
