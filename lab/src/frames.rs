@@ -41,7 +41,17 @@ pub fn frame(
     path: &std::path::Path,
     runs: usize,
 ) -> Result<FrameTimes, Box<dyn std::error::Error>> {
-    let s = Scene::load(path)?;
+    frame_of(Scene::load(path)?, path, runs, true)
+}
+
+/// [`frame`] of a loaded scene; `whole`: the one-big-tile render too
+/// (`NaN` otherwise).
+fn frame_of(
+    s: Scene,
+    path: &std::path::Path,
+    runs: usize,
+    whole: bool,
+) -> Result<FrameTimes, Box<dyn std::error::Error>> {
     let cmds = &s.commands;
     // The pipeline alone (`render_timed`: tiles and bins allocated once,
     // each finished tile discarded), in seconds per frame.
@@ -54,9 +64,13 @@ pub fn frame(
             * 1e-9)
     };
     let tiled = timed(&s.config)?;
-    let mut whole = s.config;
-    whole.tile = (whole.width, whole.height);
-    let whole_t = timed(&whole)?;
+    let whole_t = if whole {
+        let mut one = s.config;
+        one.tile = (one.width, one.height);
+        timed(&one)?
+    } else {
+        f64::NAN
+    };
     let reference_t = median(runs.min(5), || {
         std::hint::black_box(reference::render(&s.config, cmds));
     });
@@ -234,6 +248,27 @@ pub fn fills(size: &'static str, n: usize, radius: i64, runs: usize) -> FillTime
     }
 }
 
+/// The scene at `k` times its size: screen and vertex positions scaled, so
+/// each triangle covers `k^2` times the pixels (its setup costs the same).
+/// Triangles only (what the mesh scenes hold).
+pub fn scaled(mut s: Scene, k: u16) -> Result<Scene, Box<dyn std::error::Error>> {
+    s.config.width *= k;
+    s.config.height *= k;
+    for c in &mut s.commands {
+        let Command::Triangle { v, .. } = c else {
+            return Err("scaled: a scene of triangles only".into());
+        };
+        for p in v.iter_mut() {
+            p.x = Coord::from_bits(p.x.to_bits() * k as i32);
+            p.y = Coord::from_bits(p.y.to_bits() * k as i32);
+        }
+    }
+    Ok(s)
+}
+
+/// Screen scales of [`report`]'s size series.
+pub const SCALES: [u16; 4] = [1, 2, 4, 8];
+
 /// The report: Markdown tables of both measurements.
 pub fn report(
     scenes: &[std::path::PathBuf],
@@ -259,6 +294,32 @@ pub fn report(
             f.reference_ms / f.tiled_ms
         );
     }
+    if let Some(first) = scenes.first() {
+        md += &format!(
+            "\n## Triangle size: the first scene at 1x to {}x\n\n\
+             The same triangles with the screen and every vertex scaled by `k` (`frames::scaled`): \
+             setup per triangle stays, pixels per triangle grow `k^2` times. The core in its \
+             tiles (binned) against the f64 reference, per triangle.\n\n\
+             | scale | screen | core, its tiles ms | f64 reference ms | core ns / triangle | \
+             reference ns / triangle | reference / core |\n\
+             | --- | --- | ---: | ---: | ---: | ---: | ---: |\n",
+            SCALES[SCALES.len() - 1]
+        );
+        for k in SCALES {
+            let s = scaled(Scene::load(first)?, k)?;
+            let (w, h) = (s.config.width, s.config.height);
+            let f = frame_of(s, first, runs, false)?;
+            let per = |ms: f64| ms * 1e6 / f.triangles as f64;
+            md += &format!(
+                "| {k}x | {w}x{h} | {:.2} | {:.2} | {:.0} | {:.0} | {:.1}x |\n",
+                f.tiled_ms,
+                f.reference_ms,
+                per(f.tiled_ms),
+                per(f.reference_ms),
+                f.reference_ms / f.tiled_ms
+            );
+        }
+    }
     md += "\n## Filled triangles (no antialiasing), ns per covered pixel\n\n\
            Ours: flat RGB565 triangles into one 256x256 tile (setup included); `embedded-graphics`: \
            `Triangle` with a fill style into the same tile as a `DrawTarget`; `tiny-skia`: \
@@ -278,4 +339,32 @@ pub fn report(
         );
     }
     Ok(md)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TRI: &str = "[screen]\nwidth = 40\nheight = 30\nformat = \"rgb565\"\n\n[[command]]\nkind = \"triangle\"\n\
+                       v = [[4, 4, 100, 250, 0, 0], [30.5, 6, 100, 0, 250, 0], [5, 25.25, 100, 0, 0, 250]]\n";
+
+    #[test]
+    fn scaling_multiplies_the_screen_and_every_vertex() {
+        let parse = |s: &str| Scene::parse(s, std::path::Path::new(".")).unwrap();
+        let (one, two) = (parse(TRI), scaled(parse(TRI), 3).unwrap());
+        assert_eq!((two.config.width, two.config.height), (120, 90));
+        let (Command::Triangle { v: a, .. }, Command::Triangle { v: b, .. }) =
+            (&one.commands[0], &two.commands[0])
+        else {
+            panic!("a triangle")
+        };
+        for (a, b) in a.iter().zip(b) {
+            assert_eq!(b.x.to_bits(), 3 * a.x.to_bits());
+            assert_eq!(b.y.to_bits(), 3 * a.y.to_bits());
+            assert_eq!((b.z, b.color), (a.z, a.color));
+        }
+        let fill = "[screen]\nwidth = 8\nheight = 8\nformat = \"rgb565\"\n\n[[command]]\nkind = \"fill\"\n\
+                    rect = [0, 0, 4, 4]\nrgb = [1, 2, 3]\n";
+        assert!(scaled(parse(fill), 2).is_err());
+    }
 }
