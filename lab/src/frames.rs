@@ -252,8 +252,8 @@ pub fn fills(size: &'static str, n: usize, radius: i64, runs: usize) -> FillTime
 /// each triangle covers `k^2` times the pixels (its setup costs the same).
 /// Triangles only (what the mesh scenes hold).
 pub fn scaled(mut s: Scene, k: u16) -> Result<Scene, Box<dyn std::error::Error>> {
-    s.config.width *= k;
-    s.config.height *= k;
+    let dim = |d: u16| d.checked_mul(k).ok_or("scaled: the screen outgrows u16");
+    (s.config.width, s.config.height) = (dim(s.config.width)?, dim(s.config.height)?);
     for c in &mut s.commands {
         let Command::Triangle { v, .. } = c else {
             return Err("scaled: a scene of triangles only".into());
@@ -366,5 +366,6 @@ mod tests {
         let fill = "[screen]\nwidth = 8\nheight = 8\nformat = \"rgb565\"\n\n[[command]]\nkind = \"fill\"\n\
                     rect = [0, 0, 4, 4]\nrgb = [1, 2, 3]\n";
         assert!(scaled(parse(fill), 2).is_err());
+        assert!(scaled(parse(TRI), 2000).is_err());
     }
 }
