@@ -307,8 +307,8 @@ const RECIP9: [u32; 256] = {
 /// `d < (t + 1) 2^s`. No division: the Cortex-M0 has none (a library call
 /// of about 165 instructions for the exact reciprocal).
 #[inline(always)]
-fn recip9(d: u32) -> u32 {
-    debug_assert!((1 << 8..1 << 24).contains(&d));
+const fn recip9(d: u32) -> u32 {
+    debug_assert!(d >= 1 << 8 && d < 1 << 24);
     // The shift that leaves nine bits, by compares (no `clz` on the M0).
     let mut s = 0;
     if d >= 1 << 16 {
@@ -356,7 +356,7 @@ fn div_floor_bytes(n: u64, d: u32, rho: u32) -> Option<u64> {
 /// One digit of [`div_floor_bytes`]: `floor((r 2^8 + byte) / d)` and the
 /// remainder, for `r < d`, `byte < 2^8`, `rho` from [`recip9`].
 #[inline(always)]
-fn byte_digit(r: u32, byte: u32, d: u32, rho: u32) -> (u32, u32) {
+const fn byte_digit(r: u32, byte: u32, d: u32, rho: u32) -> (u32, u32) {
     let x = (r << 8) | byte;
     let mut g = r.wrapping_mul(rho) >> 24;
     let mut rem = x.wrapping_sub(g.wrapping_mul(d));
@@ -365,6 +365,27 @@ fn byte_digit(r: u32, byte: u32, d: u32, rho: u32) -> (u32, u32) {
         g += 1;
     }
     (g, rem)
+}
+
+/// `floor((2^32 - 1) / d)` for `0 < d < 2^24`: the 32-bit reciprocal of
+/// [`Divisor`]'s route for chips without a divider, once per triangle and
+/// tile. For `d >= 256` four byte digits ([`byte_digit`]) of `2^32 - 1`
+/// (about 100 instructions on the Cortex-M0) instead of the library
+/// division (about 280 there; the micro:bit's demo frame 0.4 M
+/// instructions faster, measured); below, the division.
+#[inline(always)]
+const fn reciprocal32(d: u32) -> u32 {
+    debug_assert!(d > 0 && d < 1 << 24);
+    if d < 1 << 8 {
+        return u32::MAX / d;
+    }
+    let rho = recip9(d);
+    let (mut q, mut r, mut k) = (0, 0, 0);
+    while k < 4 {
+        let (g, rem) = byte_digit(r, 0xff, d, rho);
+        (q, r, k) = ((q << 8) | g, rem, k + 1);
+    }
+    q
 }
 
 /// `floor(num 2^16 / den)` for `num < den < 2^16`: a weight with 16
@@ -398,6 +419,47 @@ pub(crate) const LONG_MUL: bool = !cfg!(target_arch = "arm") || HW_DIV32;
 /// core but ARMv6-M, the Cortex-M0, whose `leading_zeros` is a library
 /// call).
 pub(crate) const HW_CLZ: bool = LONG_MUL;
+
+/// Whether the opaque span loop drops its clamps on spans whose values
+/// provably stay in range ([`steps_bounded`], [`ends_in`]): where a clamp
+/// costs instructions at every pixel — ARMv6-M, the Cortex-M0, has no
+/// `usat` and no conditional execution (six or seven instructions a lane,
+/// measured) — and in the unit tests, which run both loops on the host.
+/// Elsewhere one saturating instruction clamps a lane, less than the
+/// per-span test would cost.
+pub(crate) const CLAMP_FREE_SPANS: bool = !HW_CLZ || cfg!(test);
+
+/// `d ^ (d >> 31)`: `|d|` for `d >= 0`, `|d| - 1` below — a bound on a
+/// step's size without a negation, OR-ed over a span's channels for
+/// [`steps_bounded`].
+#[inline(always)]
+pub(crate) fn ones_abs(d: i32) -> u32 {
+    (d ^ (d >> 31)) as u32
+}
+
+/// Whether `n - 1` steps of at most `m + 1` each (`m` from [`ones_abs`])
+/// cannot reach `2^31 + 2^24` in all: `n <= 2^12` and
+/// `(m >> 12) n < 2^19`, one 32-bit product (`(m + 1)(n - 1) <
+/// (2^12 (m >> 12) + 2^12) n < 2^31 + 2^24`).
+#[inline(always)]
+pub(crate) fn steps_bounded(m: u32, n: u32) -> bool {
+    n <= 1 << 12 && (m >> 12) * n < 1 << 19
+}
+
+/// Whether every value `v + k d` (`k < n`) of a DDA stepped in wrapping
+/// `i32` lies in `0..lim` and equals its exact integer, given
+/// [`steps_bounded`] for `|d|` and `n`, `1 <= n` and `lim <= 2^30`: both
+/// ends do. The exact last value `T = v + (n - 1) d` lies within
+/// `2^31 + 2^24` of `v`, inside `(-2^31 - 2^24, 2^31 + 2^30 + 2^24)`, a
+/// range narrower than `2^32` that meets no other copy of `0..lim` modulo
+/// 2^32: the wrapped last value is in `0..lim` exactly when `T` is. The
+/// values between are then in range too (they lie between the ends), so
+/// none wrapped.
+#[inline(always)]
+pub(crate) fn ends_in(v: i32, d: i32, n: u32, lim: u32) -> bool {
+    let last = v.wrapping_add(d.wrapping_mul((n as i32).wrapping_sub(1)));
+    (v as u32) < lim && (last as u32) < lim
+}
 
 /// `a b`, all 64 bits: one `umull` where the core has it ([`LONG_MUL`]);
 /// on the Cortex-M0 four 16x16-bit products ([`wide_mul_pieces`]) instead
@@ -647,7 +709,7 @@ impl Divisor {
             d,
             r: match (narrow, recip32) {
                 (false, _) => u64::MAX / d,
-                (true, true) => (u32::MAX / d as u32) as u64,
+                (true, true) => reciprocal32(d as u32) as u64,
                 (true, false) => 0,
             },
             narrow,
@@ -786,6 +848,62 @@ pub(crate) fn xorshift(mut seed: u64) -> impl FnMut() -> u64 {
 mod tests {
     use super::*;
 
+    /// Whenever [`steps_bounded`] and [`ends_in`] pass, every value of the
+    /// wrapping DDA is the exact one and in range (checked in `i64`), at
+    /// the extremes of every argument; and they pass often enough to be
+    /// worth their test.
+    #[test]
+    fn in_range_spans_never_leave_their_range() {
+        let mut next = xorshift(0x005e_ed0f_5a75);
+        let lims = [
+            1u32,
+            2,
+            1 << 16,
+            (32 << 16) - (63 << 10),
+            1 << 21,
+            1 << 24,
+            1 << 30,
+        ];
+        let mut passed = 0;
+        for k in 0..200_000u32 {
+            let lim = lims[k as usize % lims.len()];
+            let n = match next() % 4 {
+                0 => 1 + (next() % 4) as u32,
+                1 => 1 + (next() % 64) as u32,
+                2 => (1 << 12) - (next() % 2) as u32,
+                _ => 1 + (next() % (1 << 13)) as u32,
+            };
+            let v = match next() % 4 {
+                0 => (next() % lim as u64) as i32,
+                1 => lim as i32 - 1 - (next() % 3) as i32,
+                2 => (next() % 3) as i32 - 1,
+                _ => next() as i32,
+            };
+            let d = match next() % 5 {
+                0 => (next() % 64) as i32 - 32,
+                1 => (next() as i32) >> (next() % 32),
+                2 => ((lim as i64 - 1 - 2 * v as i64) / n.max(2) as i64 - 1) as i32,
+                3 => i32::MIN + (next() % 2) as i32,
+                _ => (next() as i32) >> 8,
+            };
+            if !(steps_bounded(ones_abs(d), n) && ends_in(v, d, n, lim)) {
+                continue;
+            }
+            passed += 1;
+            let mut w = v;
+            for j in 0..n as i64 {
+                let exact = v as i64 + j * d as i64;
+                assert!(
+                    (0..lim as i64).contains(&exact),
+                    "{v} {d} {n} {lim}: {exact}"
+                );
+                assert_eq!(w as i64, exact);
+                w = w.wrapping_add(d);
+            }
+        }
+        assert!(passed > 20_000, "{passed}");
+    }
+
     #[test]
     fn mul_small_is_the_product_modulo_2_64_on_both_routes() {
         let xs = [
@@ -913,7 +1031,11 @@ mod tests {
                 assert_eq!(div_floor_bytes(n, d, rho), Some(n / d as u64), "{n} / {d}");
             }
         }
+        for d in (1..1 << 12).chain((0..100_000).map(|_| 1 + (x() % ((1 << 24) - 1)) as u32)) {
+            assert_eq!(reciprocal32(d), u32::MAX / d, "{d}");
+        }
         for d in [256u32, 257, 511, 512, 65535, 65536, (1 << 24) - 1] {
+            assert_eq!(reciprocal32(d), u32::MAX / d, "{d}");
             let top = ((d as u64) << 40) - 1;
             assert_eq!(div_floor_bytes(top, d, recip9(d)), Some(top / d as u64));
             assert_eq!(div_floor_bytes(top + 1, d, recip9(d)), None);

@@ -50,6 +50,18 @@ pub trait Dither: 'static {
         (Self::complement(x, y) << (crate::numeric::COLOR_FRAC - 2 * Self::LOG2)) as i32
     }
 
+    /// The largest [`Self::carry`], `(4^L - 1) 2^(16 - 2L)` (0 without
+    /// dither): a lane below `2^16 (max + 1) - CARRY_MAX` quantizes
+    /// without reaching its clamp at any address.
+    ///
+    /// ```
+    /// use tilerast::dither::{Bayer8, Dither, NoDither};
+    /// assert_eq!(Bayer8::CARRY_MAX, 63 << 10);
+    /// assert_eq!(NoDither::CARRY_MAX, 0);
+    /// ```
+    const CARRY_MAX: i32 =
+        (((1u32 << (2 * Self::LOG2)) - 1) << (crate::numeric::COLOR_FRAC - 2 * Self::LOG2)) as i32;
+
     /// `4^L - 1 - threshold(x, y)`, from the table.
     #[doc(hidden)]
     #[inline(always)]

@@ -161,6 +161,13 @@ mod planes {
         /// value at the plane's precision (`z` clamped to its range), and
         /// stores it.
         fn test_and_set(&mut self, i: usize, z: i32) -> bool;
+        /// [`Self::test_and_set`] of a depth `z` in `0..2^30`, whose clamp
+        /// cannot act (a span the loop checked:
+        /// [`ends_in`](crate::numeric::ends_in)): a shift.
+        #[inline(always)]
+        fn test_and_set_in_range(&mut self, i: usize, z: i32) -> bool {
+            self.test_and_set(i, z)
+        }
         /// The Z test without the write (partial-coverage fragments).
         fn test(&self, i: usize, z: i32) -> bool;
         /// Pixels of `r` whose integer depth is above `z` (the occlusion
@@ -220,6 +227,19 @@ mod planes {
         fn nearer(z: i32, cell: u32) -> bool {
             z.max(0) < (cell << (crate::numeric::Z_FRAC - FRAC)) as i32
         }
+
+        /// The test that writes, of a depth `z` already at the plane's
+        /// precision.
+        #[inline(always)]
+        fn test_and_store(&mut self, i: usize, z: u32) -> bool {
+            let cell = &mut self.0 .0.as_flattened_mut()[i];
+            if z < cell.to_u32() {
+                *cell = T::from_u32(z);
+                true
+            } else {
+                false
+            }
+        }
     }
 
     impl<T: Cell, const FRAC: u32, const N: usize> DepthPlane for ZPlane<T, FRAC, N> {
@@ -264,14 +284,13 @@ mod planes {
         }
         #[inline(always)]
         fn test_and_set(&mut self, i: usize, z: i32) -> bool {
-            let z = Self::stored(z);
-            let cell = &mut self.0 .0.as_flattened_mut()[i];
-            if z < cell.to_u32() {
-                *cell = T::from_u32(z);
-                true
-            } else {
-                false
-            }
+            self.test_and_store(i, Self::stored(z))
+        }
+        #[inline(always)]
+        fn test_and_set_in_range(&mut self, i: usize, z: i32) -> bool {
+            debug_assert!((0..1 << 30).contains(&z));
+            // `stored(z)`, whose clamp cannot act below 2^30.
+            self.test_and_store(i, z as u32 >> (crate::numeric::Z_FRAC - FRAC))
         }
     }
 

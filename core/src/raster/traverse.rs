@@ -208,14 +208,10 @@ impl<T: EdgeInt> Iterator for Spans<'_, T> {
     fn next(&mut self) -> Option<Row> {
         while self.py < self.y1 {
             let (mut lo, mut hi) = (self.left, self.right);
-            for row in &self.rows {
-                row.clip(&mut lo, &mut hi);
-            }
+            each_edge(&mut self.rows, |row| row.clip(&mut lo, &mut hi));
             let (x0, x1) = (lo.max(self.cx0), hi.min(self.cx1));
             let (py, dy) = (self.py, self.dy);
-            for row in &mut self.rows {
-                row.next();
-            }
+            each_edge(&mut self.rows, |row| row.next());
             self.py += 1;
             self.dy += T::ONE;
             if x0 < x1 {
@@ -232,6 +228,25 @@ impl<T: EdgeInt> Iterator for Spans<'_, T> {
             }
         }
         None
+    }
+}
+
+/// Calls `f` with each of the three edges, in order: by hand on the
+/// Cortex-M0, where at `opt-level = "s"` a loop over them stayed a loop (80
+/// instructions a row on the large Gouraud + Z workload, measured); a loop
+/// elsewhere, which the compiler unrolls (written by hand there, the
+/// Cortex-M4's fast-Phong workload took 2.9% more, measured).
+#[inline(always)]
+fn each_edge<T>(rows: &mut [EdgeRows<T>; 3], mut f: impl FnMut(&mut EdgeRows<T>)) {
+    if cfg!(target_abi = "eabi") {
+        let [a, b, c] = rows;
+        f(a);
+        f(b);
+        f(c);
+    } else {
+        for row in rows {
+            f(row);
+        }
     }
 }
 

@@ -260,6 +260,33 @@ where
         F::pack(v.zip(F::MAX, |v, max| quantize_carry(v, max, carry)))
     }
 
+    /// [`Self::store`] of lanes each in `0..`[`Self::lane_limit`]: the
+    /// quantization's saturation and clamp cannot act, so a lane is a
+    /// shift ([`Self::pack_at`]'s value, fewer instructions).
+    #[inline(always)]
+    fn store_in_range<const MASKED: bool>(
+        &mut self,
+        i: usize,
+        x: u32,
+        y: u32,
+        v: F::Lanes,
+        mask: u32,
+    ) {
+        let carry = D::carry(x, y);
+        let q = v.map(|v| (v as u32 + carry as u32) as i32 >> COLOR_FRAC);
+        self.put_packed::<MASKED>(i, F::pack(q), mask);
+    }
+
+    /// The bound of lane `i` below which (and from 0) a value quantizes
+    /// without its clamp at every address: `2^16 (max + 1)` less the
+    /// dither's largest carry (at most 2^30, what
+    /// [`ends_in`](crate::numeric::ends_in) takes).
+    #[inline(always)]
+    fn lane_limit(i: usize) -> u32 {
+        let top = ((F::MAX.lane(i) as u64 + 1) << COLOR_FRAC).min(1 << 30);
+        top as u32 - D::CARRY_MAX as u32
+    }
+
     /// Composites a premultiplied colour `lanes` (output scale,
     /// [`COLOR_FRAC`] fraction bits) over pixel `i` at screen `(x, y)`,
     /// keeping `keep` (Q1.15) of the old colour: `C = lanes + C_old keep`,
