@@ -324,9 +324,8 @@ where
         let mut sp = TexSpan::default();
         for row in Spans::new(&t.e, &t.bounds, &area) {
             let (start, a) = starts.at::<P, BLEND, T>(t, &row);
+            let first = self.offset(row.x0, row.py);
             let tile = &mut *self;
-            let r = area;
-            let first = ((row.py - r.y as i64) * r.w as i64 + (row.x0 - r.x as i64)) as usize;
             ts.span::<MODE>(&row, row.x0, &mut sp);
             let (mut z, mut a) = (start.z + (1 << (Z_FRAC - 1)), a.wrapping_add(1 << 15));
             let (mut x, mut idx) = (row.x0 as u32, first);
@@ -503,8 +502,7 @@ where
             let (s, _) = starts.at::<P, false, T>(t, &first);
             let c = Self::pack_at(0, 0, s.c.map(|c| c + round_bias::<D>()));
             for row in core::iter::once(first).chain(rows) {
-                let a = self.area;
-                let idx = ((row.py - a.y as i64) * a.w as i64 + (row.x0 - a.x as i64)) as usize;
+                let idx = self.offset(row.x0, row.py);
                 let end = idx + (row.x1 - row.x0) as usize;
                 if end <= Self::CAPACITY {
                     self.color.fill(idx..end, c);
@@ -655,7 +653,7 @@ where
     fn triangle_aa(&mut self, v: &[crate::command::Vertex; 3], st: &State) {
         let a = self.area;
         crate::raster::coverage::fragments::<A::Pattern>(v, &a, |px, py, m, color, z| {
-            let i = ((py - a.y as i64) * a.w as i64 + (px - a.x as i64)) as usize;
+            let i = self.offset(px, py);
             if self.wid.pass(i, st.wid) {
                 self.aa
                     .fragment(i, m, |k| z.at(k), Z::BITS > 0, color, st.tag);
@@ -751,8 +749,7 @@ where
     /// test writes (an area-sampled pixel whose centre is inside).
     #[allow(clippy::too_many_arguments)]
     fn blend(&mut self, x: i64, y: i64, c: F::Lanes, w: i32, z: i32, zwrite: bool, st: &State) {
-        let a = self.area;
-        let idx = ((y - a.y as i64) * a.w as i64 + (x - a.x as i64)) as usize;
+        let idx = self.offset(x, y);
         let z = z + (1 << (Z_FRAC - 1));
         let pass = self.wid.pass(idx, st.wid)
             && if zwrite {
@@ -787,8 +784,7 @@ where
         (a, da): (i32, i32),
         st: &State,
     ) {
-        let r = self.area;
-        let idx = ((y - r.y as i64) * r.w as i64 + (x - r.x as i64)) as usize;
+        let idx = self.offset(x, y);
         let s = SpanStart {
             z: s.z + (1 << (Z_FRAC - 1)),
             ..s
@@ -879,7 +875,7 @@ where
         }
         let st = SpanState { c, dc, ddc, z, a };
         let steps = (s.dz, da);
-        if CLAMP_FREE_SPANS && MODE == OPAQUE && !MASKED && Self::in_range(&st, s.dz, n) {
+        if CLAMP_FREE_SPANS && MODE == OPAQUE && !MASKED && n > 2 && Self::in_range(&st, s.dz, n) {
             // Every value in range: the loop without its clamps (the
             // micro:bit's large Gouraud + Z workload 77.0 -> 60.3
             // instructions a pixel, the per-span test included: measured).
@@ -1072,8 +1068,7 @@ where
         ddc: F::Lanes,
         st: &State,
     ) {
-        let a = self.area;
-        let idx = ((y - a.y as i64) * a.w as i64 + (x - a.x as i64)) as usize;
+        let idx = self.offset(x, y);
         let bias = round_bias::<D>();
         let s = SpanStart {
             c: s.c.map(|v| v + bias),
