@@ -162,8 +162,7 @@ mod planes {
         /// stores it.
         fn test_and_set(&mut self, i: usize, z: i32) -> bool;
         /// [`Self::test_and_set`] of a depth `z` in `0..2^30`, whose clamp
-        /// cannot act (a span the loop checked:
-        /// [`ends_in`](crate::numeric::ends_in)): a shift.
+        /// cannot act (a span the loop has checked whole): a shift.
         #[inline(always)]
         fn test_and_set_in_range(&mut self, i: usize, z: i32) -> bool {
             self.test_and_set(i, z)
