@@ -118,7 +118,7 @@ impl Cull {
 /// assert_eq!(s.plane_mask, u32::MAX);
 /// assert_eq!(core::mem::size_of::<State>(), 8);
 /// ```
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct State {
     /// The command draws only where the window-ID plane holds this ID
@@ -166,7 +166,7 @@ impl Default for State {
 /// assert!(s.validate().is_ok());
 /// assert_eq!(SpanCmd { len: 257, ..s }.validate(), Err(Error::SpanOutOfRange));
 /// ```
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct SpanCmd {
     /// Screen column of the first pixel.
     pub x: i32,
@@ -223,7 +223,7 @@ impl SpanCmd {
 }
 
 /// One display-list command.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 // A plain tag byte: without it the compiler hides the tag in `Blend`'s

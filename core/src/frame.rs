@@ -9,11 +9,13 @@ use crate::config::TileConfig;
 use crate::error::{Error, FlushError};
 use crate::format::PixelFormat;
 use crate::geom::Rect;
+use crate::hash::WordHash;
 use crate::list::DisplayList;
 use crate::numeric::MAX_SIDE;
 use crate::raster::coverage::AaMode;
 use crate::tile::Tile;
 pub use crate::tile::{Clear, Phase};
+use core::hash::Hash;
 use embedded_graphics_core::draw_target::DrawTarget;
 
 /// What rendering a frame did.
@@ -32,6 +34,9 @@ pub struct FrameStats {
     /// Tiles that replayed the whole list unbinned (the bins were disabled,
     /// or too small for that tile alone).
     pub unbinned_tiles: u32,
+    /// Tiles neither drawn nor handed on because their commands were those
+    /// of the last frame ([`Frame::render_changed`]).
+    pub unchanged_tiles: u32,
 }
 
 /// Where a frame's commands come from: a slice, a [`DisplayList`], or an
@@ -297,7 +302,82 @@ impl Frame {
     where
         S: CommandSource + ?Sized,
     {
-        self.render_upto::<{ Phase::ALL }, N, C, S, E, CAP, TB>(Phase::All, tile, bins, cmds, done)
+        self.render_upto::<{ Phase::ALL }, false, _, _, _, _, _, _>(
+            Phase::All,
+            tile,
+            bins,
+            cmds,
+            done,
+            never,
+        )
+    }
+
+    /// [`Frame::render_binned`] that draws and hands to `done` only the
+    /// tiles whose input changed since the last frame rendered with
+    /// `damage`: partial updates decided *before* drawing, as LVGL's
+    /// invalidated areas are. Each tile first hashes its binned commands
+    /// (read in place, hashed whole: a moved vertex, a new colour, a
+    /// command that left or entered the tile all count), its place and the
+    /// frame's [`Clear`]; when that equals the tile's hash from the last
+    /// frame, the tile is skipped — the panel, whose memory is the front
+    /// buffer, still shows it. [`FrameStats::unchanged_tiles`] counts the
+    /// skipped tiles.
+    ///
+    /// A texture's texels are not hashed (only which texture a command
+    /// names): after changing a texture's pixels, call
+    /// [`Damage::invalidate`]. Hashes are 32 bits: a changed tile whose
+    /// hash collides (odds 2^-32) keeps its old pixels until it changes
+    /// again. Tiles beyond `TILES` are always drawn. A `Damage` used here
+    /// holds input hashes: do not also pass it to [`Damage::changed`], which
+    /// hashes output.
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// use tilerast::bin::Bins;
+    /// type T = Tile<{ groups(16, 16) }, Rgb565Format>;
+    /// let frame = T::frame::<16, 16>(64, 32)?; // 8 tiles
+    /// let (mut tile, mut bins) = (T::new(), Bins::<64, 8>::new());
+    /// let mut damage = Damage::<8>::new();
+    /// let mut draw = |x: i32| {
+    ///     let list = [Command::fill(Rect::new(x, 4, 4, 4), Rgb::new(255, 0, 0))];
+    ///     let mut sent = 0;
+    ///     frame.render_changed(&mut tile, &mut bins, &list[..], &mut damage, |_| {
+    ///         sent += 1;
+    ///         Ok::<(), ()>(())
+    ///     }).map(|_| sent).map_err(|_| Error::BadSize)
+    /// };
+    /// assert_eq!(draw(0)?, 8); // first frame: every tile
+    /// assert_eq!(draw(0)?, 0); // nothing changed: nothing drawn or sent
+    /// assert_eq!(draw(20)?, 2); // the fill left tile 0 for tile 1
+    /// # Ok::<(), Error>(())
+    /// ```
+    pub fn render_changed<
+        const N: usize,
+        C: TileConfig,
+        S,
+        E,
+        const CAP: usize,
+        const TB: usize,
+        const TILES: usize,
+    >(
+        &self,
+        tile: &mut Tile<N, C>,
+        bins: &mut Bins<CAP, TB>,
+        cmds: &S,
+        damage: &mut Damage<TILES>,
+        done: impl FnMut(&mut Tile<N, C>) -> Result<(), E>,
+    ) -> Result<FrameStats, FlushError<E>>
+    where
+        S: CommandSource + ?Sized,
+    {
+        self.render_upto::<{ Phase::ALL }, true, N, C, S, E, CAP, TB>(
+            Phase::All,
+            tile,
+            bins,
+            cmds,
+            done,
+            |t, h| damage.same(t as usize, h),
+        )
     }
 
     /// [`Frame::render_binned`] stopped after `phase` ([`Phase`]): for
@@ -333,20 +413,24 @@ impl Frame {
             // One instantiation for the phases that draw nothing (flash is
             // scarce on the micro:bit), one for each that draws part.
             Phase::Bin | Phase::Clear | Phase::Decode => {
-                self.render_upto::<2, N, C, S, E, CAP, TB>(phase, tile, bins, cmds, done)
+                self.render_upto::<2, false, _, _, _, _, _, _>(phase, tile, bins, cmds, done, never)
             }
             Phase::Setup => {
-                self.render_upto::<3, N, C, S, E, CAP, TB>(phase, tile, bins, cmds, done)
+                self.render_upto::<3, false, _, _, _, _, _, _>(phase, tile, bins, cmds, done, never)
             }
             Phase::Traverse => {
-                self.render_upto::<4, N, C, S, E, CAP, TB>(phase, tile, bins, cmds, done)
+                self.render_upto::<4, false, _, _, _, _, _, _>(phase, tile, bins, cmds, done, never)
             }
             Phase::All => self.render_binned(tile, bins, cmds, done),
         }
     }
 
+    /// The frame pipeline up to `phase`; with `HASH`, each tile first
+    /// hashes its input and is skipped when `same(tile, hash)`.
+    #[allow(clippy::too_many_arguments)]
     fn render_upto<
         const UPTO: u8,
+        const HASH: bool,
         const N: usize,
         C: TileConfig,
         S,
@@ -360,6 +444,7 @@ impl Frame {
         bins: &mut Bins<CAP, TB>,
         cmds: &S,
         mut done: impl FnMut(&mut Tile<N, C>) -> Result<(), E>,
+        mut same: impl FnMut(u32, u32) -> bool,
     ) -> Result<FrameStats, FlushError<E>>
     where
         S: CommandSource + ?Sized,
@@ -427,12 +512,22 @@ impl Frame {
                     break;
                 }
                 let area = self.tile_rect(&g, t);
+                let slot = binned.then_some((t - t0) as usize);
+                if HASH {
+                    let mut h = WordHash::new();
+                    (area, self.clear.color, self.clear.depth, self.clear.wid).hash(&mut h);
+                    tile_commands(cmds, bins, slot, &area, bounds, |cmd| cmd.hash(&mut h));
+                    if same(t, h.value()) {
+                        stats.unchanged_tiles += 1;
+                        continue;
+                    }
+                }
                 tile.begin(area, &self.clear)?;
                 if phase == Phase::Clear {
                     continue;
                 }
                 let mut replay = |tile: &mut Tile<N, C>| {
-                    let mut draw = |cmd: &Command| {
+                    let draw = |cmd: &Command| {
                         if UPTO == Phase::Decode as u8 {
                             core::hint::black_box(cmd);
                         } else if UPTO == Phase::ALL {
@@ -445,16 +540,7 @@ impl Frame {
                         }
                         stats.replayed += 1;
                     };
-                    if binned {
-                        cmds.replay(bins.keys((t - t0) as usize), draw);
-                    } else {
-                        // Validated already: no error can come back.
-                        let _ = cmds.each(|cmd| {
-                            if bounds(cmd).and_then(|b| b.intersect(&area)).is_some() {
-                                draw(cmd);
-                            }
-                        });
-                    }
+                    tile_commands(cmds, bins, slot, &area, bounds, draw);
                 };
                 replay(tile);
                 if UPTO < Phase::ALL {
@@ -489,6 +575,39 @@ impl Frame {
         T::Color: From<<C::Format as PixelFormat>::Color>,
     {
         self.render_with(tile, cmds, |t| t.flush(target))
+    }
+}
+
+/// No tile is the same as last frame's: every tile is drawn
+/// ([`Frame::render_upto`] without `HASH`).
+fn never(_: u32, _: u32) -> bool {
+    false
+}
+
+/// Calls `f` with each command of the tile at `area`: its keys in bins
+/// slot `slot` replayed, or without bins (`None`) every command whose
+/// bounds meet it.
+#[inline(always)]
+fn tile_commands<S, const CAP: usize, const TB: usize>(
+    cmds: &S,
+    bins: &Bins<CAP, TB>,
+    slot: Option<usize>,
+    area: &Rect,
+    bounds: impl Fn(&Command) -> Option<Rect>,
+    mut f: impl FnMut(&Command),
+) where
+    S: CommandSource + ?Sized,
+{
+    match slot {
+        Some(slot) => cmds.replay(bins.keys(slot), f),
+        None => {
+            // Validated already: no error can come back.
+            let _ = cmds.each(|cmd| {
+                if bounds(cmd).and_then(|b| b.intersect(area)).is_some() {
+                    f(cmd);
+                }
+            });
+        }
     }
 }
 
@@ -593,6 +712,20 @@ impl<const TILES: usize> Damage<TILES> {
         self.known = [false; TILES];
     }
 
+    /// Whether tile `t`'s hash `h` equals the one remembered for it; `h`
+    /// is remembered either way. A tile beyond `TILES` is never the same.
+    fn same(&mut self, t: usize, h: u32) -> bool {
+        match (self.hash.get_mut(t), self.known.get_mut(t)) {
+            (Some(old), Some(known)) => {
+                let same = *known && *old == h;
+                *old = h;
+                *known = true;
+                same
+            }
+            _ => false,
+        }
+    }
+
     /// Whether `tile` (a finished tile of `frame`) differs from what was
     /// last sent for its place — then it is remembered as sent, so call it
     /// once per tile, and flush the tile when it returns `true`.
@@ -604,19 +737,7 @@ impl<const TILES: usize> Damage<TILES> {
         let a = tile.area();
         let g = frame.grid();
         let t = (a.y.max(0) as u32 / g.th) * g.cols + a.x.max(0) as u32 / g.tw;
-        let h = tile.content_hash();
-        match (
-            self.hash.get_mut(t as usize),
-            self.known.get_mut(t as usize),
-        ) {
-            (Some(old), Some(known)) => {
-                let same = *known && *old == h;
-                *old = h;
-                *known = true;
-                !same
-            }
-            _ => true,
-        }
+        !self.same(t as usize, tile.content_hash())
     }
 }
 

@@ -14,7 +14,7 @@ use crate::numeric::{Coord, COORD_LIMIT, SUBPIXEL, SUBPIXEL_BITS};
 /// assert_eq!(a.intersect(&Rect::new(5, -5, 10, 10)), Some(Rect::new(5, 0, 5, 5)));
 /// assert_eq!(a.intersect(&Rect::new(10, 0, 1, 1)), None);
 /// ```
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Rect {
     /// Left column.

@@ -69,6 +69,91 @@ impl Crc32 {
     }
 }
 
+/// A 32-bit hash a word at a time, for change detection (not
+/// cryptographic, not a checksum: equal inputs give equal hashes on every
+/// chip; different ones collide with odds about 2^-32). It is a
+/// [`core::hash::Hasher`], so any `Hash` value can be added, e.g. a
+/// [`Command`](crate::command::Command).
+///
+/// ```
+/// use core::hash::{Hash, Hasher};
+/// use tilerast::hash::WordHash;
+/// use tilerast::prelude::*;
+/// let hash = |c: &Command| {
+///     let mut h = WordHash::new();
+///     c.hash(&mut h);
+///     h.value()
+/// };
+/// let a = Command::fill(Rect::new(0, 0, 4, 4), Rgb::new(1, 2, 3));
+/// let b = Command::fill(Rect::new(0, 0, 4, 4), Rgb::new(1, 2, 4));
+/// assert_eq!(hash(&a), hash(&a));
+/// assert_ne!(hash(&a), hash(&b));
+/// ```
+#[derive(Debug, Clone, Copy)]
+pub struct WordHash(u32);
+
+impl Default for WordHash {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl WordHash {
+    /// A fresh hash (FNV's offset basis).
+    pub const fn new() -> Self {
+        WordHash(0x811C_9DC5)
+    }
+
+    /// Adds one word: xor, multiply by the golden ratio's 2^32 multiple,
+    /// rotate.
+    #[inline(always)]
+    pub fn add(&mut self, v: u32) {
+        self.0 = (self.0 ^ v).wrapping_mul(0x9E37_79B1).rotate_left(13);
+    }
+
+    /// The hash of everything added so far.
+    pub const fn value(&self) -> u32 {
+        self.0
+    }
+}
+
+impl core::hash::Hasher for WordHash {
+    fn finish(&self) -> u64 {
+        self.0 as u64
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        bytes.iter().for_each(|&b| self.add(b as u32));
+    }
+    fn write_u8(&mut self, v: u8) {
+        self.add(v as u32)
+    }
+    fn write_u16(&mut self, v: u16) {
+        self.add(v as u32)
+    }
+    fn write_u32(&mut self, v: u32) {
+        self.add(v)
+    }
+    fn write_u64(&mut self, v: u64) {
+        self.add(v as u32);
+        self.add((v >> 32) as u32);
+    }
+    fn write_usize(&mut self, v: usize) {
+        self.write_u64(v as u64)
+    }
+    fn write_i8(&mut self, v: i8) {
+        self.add(v as u32)
+    }
+    fn write_i16(&mut self, v: i16) {
+        self.add(v as u32)
+    }
+    fn write_i32(&mut self, v: i32) {
+        self.add(v as u32)
+    }
+    fn write_isize(&mut self, v: isize) {
+        self.write_u64(v as u64)
+    }
+}
+
 /// A `DrawTarget` of a given size that stores nothing and hashes every
 /// colour it receives, in order, as its raw storage value in little-endian
 /// bytes (`ceil(bits / 8)` bytes per pixel).

@@ -38,8 +38,9 @@ struct Report {
     bench_crcs: BTreeMap<String, u32>,
     /// Per scene: ticks until each phase (bin, clear, decode, setup, traverse, all).
     phases: BTreeMap<String, [u64; 6]>,
-    /// The animated gauge: (frames, tiles, sent tiles, bytes full, bytes sent, ticks).
-    anim: Option<[u64; 6]>,
+    /// The animated gauge, per way of finding changes (`output`, `input`):
+    /// (frames, tiles, drawn, sent tiles, bytes full, bytes sent, ticks).
+    anim: BTreeMap<String, [u64; 7]>,
     /// Per scene: (bin passes, bin peak, unbinned tiles, replayed).
     bins: BTreeMap<String, [u64; 4]>,
     /// Rotating meshes drawn by the on-device geometry stage, one per frame.
@@ -144,10 +145,12 @@ fn parse(out: &str) -> Report {
             }
             Some("anim") => {
                 assert!(!w.contains(&"error"), "{line}");
-                r.anim = Some(
+                r.anim.insert(
+                    w[1].to_string(),
                     [
                         "frames",
                         "tiles",
+                        "drawn",
                         "sent_tiles",
                         "bytes_full",
                         "bytes_sent",
@@ -958,21 +961,40 @@ fn report(reports: &[BoardResult]) -> String {
     }
     md += &spin_section(&boards);
     for b in &boards {
-        if let Some([frames, tiles, sent, full, bytes, ticks]) = b.anim {
+        let (Some(out), Some(inp)) = (b.anim.get("output"), b.anim.get("input")) else {
+            continue;
+        };
+        let [frames, tiles, _, _, full, _, _] = *out;
+        let per = |v: u64| v / frames;
+        let instr = |t: u64| t as f64 * b.instr_per_tick / frames as f64 / 1e6;
+        md += &format!(
+            "\n## Partial updates ({})\n\nAn animated gauge (`targets/common/src/anim.rs`): 12 Gouraud \
+             wedges and a needle that turns every frame, 240x240 RGB565 + Z in 64x32 tiles, {frames} \
+             frames. *Output*: every tile is drawn, hashed (`Damage::changed`) and sent only when its \
+             pixels changed. *Input*: each tile hashes its binned commands first and is drawn and sent \
+             only when they changed (`Frame::render_changed`). Instructions: binning, hashing and \
+             drawing, a frame.\n\n\
+             | | tiles drawn | tiles sent | bytes sent to the panel | bytes a frame | instructions a frame |\n\
+             | --- | ---: | ---: | ---: | ---: | ---: |\n\
+             | full refresh | {tiles} | {tiles} | {full} | {} | — |\n",
+            b.board,
+            per(full),
+        );
+        for (name, r) in [("output", out), ("input", inp)] {
+            let [_, _, drawn, sent, _, bytes, ticks] = *r;
             md += &format!(
-                "\n## Partial updates ({})\n\nAn animated gauge (`targets/common/src/anim.rs`): 12 Gouraud \
-                 wedges and a needle that turns every frame, 240x240 RGB565 + Z in 64x32 tiles, {frames} \
-                 frames. Each finished tile is hashed (`Damage`) and sent only when it changed.\n\n\
-                 | | tiles sent | bytes sent to the panel | per frame |\n| --- | ---: | ---: | ---: |\n\
-                 | full refresh | {tiles} | {full} | {} |\n| partial updates | {sent} | {bytes} | {} |\n\n\
-                 Bytes sent: **{:.1}%** of a full refresh. Rendering and hashing: {:.2} M instructions a frame.\n",
-                b.board,
-                full / frames,
-                bytes / frames,
-                100.0 * bytes as f64 / full as f64,
-                ticks as f64 * b.instr_per_tick / frames as f64 / 1e6
+                "| partial updates, {name} | {drawn} | {sent} | {bytes} | {} | {:.2} M |\n",
+                per(bytes),
+                instr(ticks)
             );
         }
+        md += &format!(
+            "\nBytes sent: **{:.1}%** (output) and **{:.1}%** (input) of a full refresh; \
+             instructions a frame: input **{:.2}x** output.\n",
+            100.0 * out[5] as f64 / full as f64,
+            100.0 * inp[5] as f64 / full as f64,
+            inp[6] as f64 / out[6] as f64
+        );
     }
     for b in &boards {
         if b.volumes.is_empty() {

@@ -441,11 +441,12 @@ where
     /// compares between frames.
     pub fn content_hash(&self) -> u32 {
         let a = self.area;
-        let mix = |h: u32, v: u32| (h ^ v).wrapping_mul(0x9E37_79B1).rotate_left(13);
-        let h = [a.x as u32, a.y as u32, a.w, a.h]
+        let mut h = crate::hash::WordHash::new();
+        [a.x as u32, a.y as u32, a.w, a.h]
             .into_iter()
-            .fold(0x811C_9DC5, mix);
-        (0..a.area() as usize).fold(h, |h, i| mix(h, self.color.get(i)))
+            .chain((0..a.area() as usize).map(|i| self.color.get(i)))
+            .for_each(|v| h.add(v));
+        h.value()
     }
 
     /// Flushes the tile to a display with `color` converting each packed

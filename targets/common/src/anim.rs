@@ -1,9 +1,12 @@
 //! An animated scene for partial updates: a gauge — a static dial of
 //! Gouraud triangles with a needle sweeping over it — rendered frame after
 //! frame into 64x32 tiles, each tile flushed only when it changed
-//! ([`Damage`]). The report compares the bytes sent to the panel with and
-//! without ([`run`]); the host test checks the panel ends each frame equal
-//! to a full refresh.
+//! ([`Damage`]): found after drawing, from the tile's pixels
+//! ([`Changes::Output`]), or before, from its commands, so that unchanged
+//! tiles are not drawn either ([`Changes::Input`],
+//! [`Frame::render_changed`]). The report compares the bytes sent to the
+//! panel and the instructions with and without ([`run`]); the host test
+//! checks the panel ends each frame equal to a full refresh.
 
 use crate::Clock;
 use tilerast::prelude::*;
@@ -82,11 +85,26 @@ pub fn frame_commands(k: u32) -> [Command; 13] {
     out
 }
 
+/// How a frame finds the tiles to send.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Changes {
+    /// Every tile is drawn; a tile is sent when its pixels' hash differs
+    /// from the last one sent ([`Damage::changed`]).
+    Output,
+    /// A tile is drawn only when its commands' hash differs from the last
+    /// frame's ([`Frame::render_changed`]), and a drawn tile is sent only
+    /// when its pixels changed too (a second [`Damage`]: a command can
+    /// enter a tile's bins without covering a pixel of it).
+    Input,
+}
+
 /// What the animation sent and cost.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct AnimRun {
-    /// Tiles rendered over all frames.
+    /// Tiles of all frames (drawn or not).
     pub tiles: u32,
+    /// Tiles drawn over all frames.
+    pub drawn: u32,
     /// Tiles sent (changed) over all frames.
     pub sent_tiles: u32,
     /// Bytes a full refresh of every frame sends.
@@ -98,36 +116,49 @@ pub struct AnimRun {
 }
 
 /// Renders [`FRAMES`] frames, calling `send(tile)` for each tile that
-/// changed since it was last sent.
+/// changed since it was last sent, found as `changes` says.
 pub fn run(
     tile: &mut AnimTile,
     clock: &mut impl Clock,
+    changes: Changes,
     mut send: impl FnMut(&AnimTile),
 ) -> Result<AnimRun, Error> {
     let frame = AnimTile::frame::<64, 32>(SIDE, SIDE)?;
     let mut bins: Bins<256, TILES> = Bins::new();
-    let mut damage: Damage<TILES> = Damage::new();
+    let (mut damage, mut sent): (Damage<TILES>, Damage<TILES>) = (Damage::new(), Damage::new());
     let mut run = AnimRun::default();
+    let full = frame
+        .tiles()
+        .fold(0, |n, a| n + AnimTile::panel_len(a.w, a.h) as u64);
     for k in 0..FRAMES {
         let cmds = frame_commands(k);
         clock.lap();
-        frame
-            .render_binned(tile, &mut bins, &cmds[..], |t| {
-                let len = AnimTile::panel_len(t.area().w, t.area().h) as u64;
-                run.tiles += 1;
-                run.bytes_full += len;
-                if damage.changed(&frame, t) {
-                    run.sent_tiles += 1;
-                    run.bytes_sent += len;
-                    send(t);
-                }
-                Ok::<(), ()>(())
-            })
-            .map_err(|e| match e {
-                FlushError::Raster(e) => e,
-                _ => Error::BadSize,
-            })?;
+        let mut done = |t: &mut AnimTile, sent: bool| {
+            run.drawn += 1;
+            if sent {
+                run.sent_tiles += 1;
+                run.bytes_sent += AnimTile::panel_len(t.area().w, t.area().h) as u64;
+                send(t);
+            }
+            Ok::<(), ()>(())
+        };
+        match changes {
+            Changes::Output => frame.render_binned(tile, &mut bins, &cmds[..], |t| {
+                let sent = damage.changed(&frame, t);
+                done(t, sent)
+            }),
+            Changes::Input => frame.render_changed(tile, &mut bins, &cmds[..], &mut damage, |t| {
+                let changed = sent.changed(&frame, t);
+                done(t, changed)
+            }),
+        }
+        .map_err(|e| match e {
+            FlushError::Raster(e) => e,
+            _ => Error::BadSize,
+        })?;
         run.ticks += clock.lap() as u64;
+        run.tiles += TILES as u32;
+        run.bytes_full += full;
     }
     Ok(run)
 }

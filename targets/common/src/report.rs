@@ -192,24 +192,30 @@ pub fn report_city(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt::R
     Ok(())
 }
 
-/// Prints `anim frames F tiles T sent_tiles S bytes_full B bytes_sent P ticks K`:
-/// the animated gauge with partial updates ([`crate::anim`]).
+/// Prints `anim MODE frames F tiles T drawn D sent_tiles S bytes_full B
+/// bytes_sent P ticks K` for each way of finding changed tiles: the
+/// animated gauge with partial updates ([`crate::anim`]).
 #[inline(never)]
 pub fn report_anim(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt::Result {
+    use crate::anim::Changes;
     let mut tile = crate::anim::AnimTile::new();
-    match crate::anim::run(&mut tile, clock, |_| {}) {
-        Ok(r) => writeln!(
-            out,
-            "anim frames {} tiles {} sent_tiles {} bytes_full {} bytes_sent {} ticks {}",
-            crate::anim::FRAMES,
-            r.tiles,
-            r.sent_tiles,
-            r.bytes_full,
-            r.bytes_sent,
-            r.ticks
-        ),
-        Err(e) => writeln!(out, "anim error {e}"),
+    for (name, changes) in [("output", Changes::Output), ("input", Changes::Input)] {
+        match crate::anim::run(&mut tile, clock, changes, |_| {}) {
+            Ok(r) => writeln!(
+                out,
+                "anim {name} frames {} tiles {} drawn {} sent_tiles {} bytes_full {} bytes_sent {} ticks {}",
+                crate::anim::FRAMES,
+                r.tiles,
+                r.drawn,
+                r.sent_tiles,
+                r.bytes_full,
+                r.bytes_sent,
+                r.ticks
+            )?,
+            Err(e) => writeln!(out, "anim {name} error {e}")?,
+        }
     }
+    Ok(())
 }
 
 /// How a workload is drawn.
