@@ -127,9 +127,10 @@ pub fn run(
     let mut bins: Bins<256, TILES> = Bins::new();
     let (mut damage, mut sent): (Damage<TILES>, Damage<TILES>) = (Damage::new(), Damage::new());
     let mut run = AnimRun::default();
-    let full = frame
-        .tiles()
-        .fold(0, |n, a| n + AnimTile::panel_len(a.w, a.h) as u64);
+    // A full refresh of one frame: its tiles and their panel bytes.
+    let (count, full) = frame.tiles().fold((0, 0), |(n, b), a| {
+        (n + 1, b + AnimTile::panel_len(a.w, a.h) as u64)
+    });
     for k in 0..FRAMES {
         let cmds = frame_commands(k);
         clock.lap();
@@ -157,7 +158,7 @@ pub fn run(
             _ => Error::BadSize,
         })?;
         run.ticks += clock.lap() as u64;
-        run.tiles += TILES as u32;
+        run.tiles += count;
         run.bytes_full += full;
     }
     Ok(run)
