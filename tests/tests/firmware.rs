@@ -8,14 +8,19 @@
 //! plain `cargo test`; `cargo xtask test` installs both and runs it.
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
-use std::process::Command as Process;
+use std::path::Path;
 use tilerast::prelude::{AffineTexturing, ExactTexturing, QuadraticTexturing};
 use tilerast::texture::NEVER_SPLIT;
-use tilerast_fw::report::{scene_crc, Demo, SceneKind, Ssd1306, Teapot, TeapotCull};
+use tilerast_fw::report::{scene_crc, Demo, Ssd1306, Teapot, TeapotCull};
 use tilerast_fw::workloads::{self, FILL_CMDS, LARGE_TRIANGLE_CMDS, LINE_CMDS, TRIANGLE_CMDS};
-use tilerast_sim::Scene;
-use tilerast_tests::{repo, scene};
+
+mod qemu;
+use qemu::{build, export_scenes, run_with};
+
+/// Runs a firmware ELF under QEMU; returns what it printed.
+fn run(board: &str, elf: &Path) -> String {
+    run_with(board, elf, &[])
+}
 
 /// One `scene` line of a firmware report.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -232,86 +237,6 @@ fn parse(out: &str) -> Report {
         }
     }
     r
-}
-
-/// Exports the demo scenes as firmware flash images; returns their folder.
-fn export_scenes() -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("scenes");
-    std::fs::create_dir_all(&dir).unwrap();
-    for name in [Demo::NAME, Teapot::NAME, TeapotCull::NAME, Ssd1306::NAME] {
-        let s = Scene::load(scene(&format!("{name}.toml"))).unwrap();
-        std::fs::write(dir.join(format!("{name}.bin")), s.encode().unwrap()).unwrap();
-    }
-    // The teapot in model space, for the geometry stage on the device.
-    let mesh = tilerast_sim::mesh::export_mesh(
-        &repo().join("assets/models/teapot.obj"),
-        &tilerast_sim::Limits::default(),
-    )
-    .unwrap();
-    std::fs::write(dir.join("teapot.mesh"), mesh).unwrap();
-    dir
-}
-
-fn cargo() -> String {
-    std::env::var("CARGO").unwrap_or_else(|_| "cargo".into())
-}
-
-/// Builds a board's firmware with `features` and returns the ELF path.
-fn build(board: &str, scenes: &Path, features: Option<&str>) -> PathBuf {
-    let dir = repo().join("targets").join(board);
-    let mut cmd = Process::new(cargo());
-    cmd.current_dir(&dir)
-        .env("TILERAST_SCENES", scenes)
-        .args(["build", "--release", "--quiet"]);
-    if let Some(f) = features {
-        cmd.args(["--no-default-features", "--features", f]);
-    }
-    let st = cmd.status().expect("cargo");
-    assert!(st.success(), "building {board} firmware failed");
-    let triple = if board == "microbit" {
-        "thumbv6m-none-eabi"
-    } else {
-        "thumbv7em-none-eabihf"
-    };
-    // Cargo puts the board's build where `CARGO_TARGET_DIR` says, if set
-    // (relative to the board's directory, where cargo ran).
-    let target = std::env::var_os("CARGO_TARGET_DIR")
-        .map(|t| dir.join(t))
-        .unwrap_or_else(|| dir.join("target"));
-    target
-        .join(triple)
-        .join("release")
-        .join(format!("tilerast-{board}"))
-}
-
-/// Runs a firmware ELF under QEMU with the runner its `.cargo/config.toml` names.
-fn run(board: &str, elf: &Path) -> String {
-    let config = std::fs::read_to_string(
-        repo()
-            .join("targets")
-            .join(board)
-            .join(".cargo/config.toml"),
-    )
-    .unwrap();
-    let runner = config
-        .lines()
-        .find_map(|l| l.strip_prefix("runner = "))
-        .expect("runner")
-        .trim_matches('"');
-    let mut words = runner.split_whitespace();
-    let out = Process::new(words.next().unwrap())
-        .args(words)
-        .arg(elf)
-        .output()
-        .expect("qemu-system-arm (installed by `cargo xtask test`)");
-    let text = String::from_utf8_lossy(&out.stdout).into_owned();
-    assert!(
-        out.status.success(),
-        "{board} exited with {}:\n{text}\n{}",
-        out.status,
-        String::from_utf8_lossy(&out.stderr)
-    );
-    text
 }
 
 /// Flash (`.vector_table` + `.text` + `.rodata`) and static RAM (`.data` + `.bss`) of an ELF.

@@ -404,6 +404,22 @@ fn report() -> Result<(), String> {
         "{}",
         std::fs::read_to_string(&path).map_err(|e| e.to_string())?
     );
+    // The same workloads' instructions function by function (QEMU with
+    // the segment profiler): `reports/profile.md`.
+    let profile = path.with_file_name("profile.md");
+    run_env(
+        &[("TILERAST_PROFILE", &profile.to_string_lossy())],
+        "cargo",
+        &[
+            "test",
+            "-p",
+            "tilerast-tests",
+            "--test",
+            "profile",
+            "--",
+            "--include-ignored",
+        ],
+    )?;
     // Host frames (tiled, one tile, f64 reference) and fills against the
     // peers, timed in one run: `reports/frames.md`; then volume rendering,
     // normal blending against per-slice shading (seed 002):

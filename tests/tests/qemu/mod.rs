@@ -1,0 +1,94 @@
+//! Building and running the QEMU firmware under `targets/`: shared by the
+//! firmware test (`firmware.rs`) and the instruction profile
+//! (`profile.rs`).
+
+use std::path::{Path, PathBuf};
+use std::process::Command as Process;
+use tilerast_fw::report::{Demo, SceneKind, Ssd1306, Teapot, TeapotCull};
+use tilerast_sim::Scene;
+use tilerast_tests::{repo, scene};
+
+/// Exports the demo scenes as firmware flash images; returns their folder.
+pub fn export_scenes() -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("scenes");
+    std::fs::create_dir_all(&dir).unwrap();
+    for name in [Demo::NAME, Teapot::NAME, TeapotCull::NAME, Ssd1306::NAME] {
+        let s = Scene::load(scene(&format!("{name}.toml"))).unwrap();
+        std::fs::write(dir.join(format!("{name}.bin")), s.encode().unwrap()).unwrap();
+    }
+    // The teapot in model space, for the geometry stage on the device.
+    let mesh = tilerast_sim::mesh::export_mesh(
+        &repo().join("assets/models/teapot.obj"),
+        &tilerast_sim::Limits::default(),
+    )
+    .unwrap();
+    std::fs::write(dir.join("teapot.mesh"), mesh).unwrap();
+    dir
+}
+
+pub fn cargo() -> String {
+    std::env::var("CARGO").unwrap_or_else(|_| "cargo".into())
+}
+
+/// Builds a board's firmware with `features` and returns the ELF path.
+pub fn build(board: &str, scenes: &Path, features: Option<&str>) -> PathBuf {
+    let dir = repo().join("targets").join(board);
+    let mut cmd = Process::new(cargo());
+    cmd.current_dir(&dir)
+        .env("TILERAST_SCENES", scenes)
+        .args(["build", "--release", "--quiet"]);
+    if let Some(f) = features {
+        cmd.args(["--no-default-features", "--features", f]);
+    }
+    let st = cmd.status().expect("cargo");
+    assert!(st.success(), "building {board} firmware failed");
+    let triple = if board == "microbit" {
+        "thumbv6m-none-eabi"
+    } else {
+        "thumbv7em-none-eabihf"
+    };
+    // Cargo puts the board's build where `CARGO_TARGET_DIR` says, if set
+    // (relative to the board's directory, where cargo ran).
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map(|t| dir.join(t))
+        .unwrap_or_else(|| dir.join("target"));
+    target
+        .join(triple)
+        .join("release")
+        .join(format!("tilerast-{board}"))
+}
+
+/// Runs a firmware ELF under QEMU with the runner its `.cargo/config.toml`
+/// names, with more QEMU arguments (a `-plugin`, say) before `-kernel`;
+/// returns what it printed.
+pub fn run_with(board: &str, elf: &Path, extra: &[&str]) -> String {
+    let config = std::fs::read_to_string(
+        repo()
+            .join("targets")
+            .join(board)
+            .join(".cargo/config.toml"),
+    )
+    .unwrap();
+    let runner = config
+        .lines()
+        .find_map(|l| l.strip_prefix("runner = "))
+        .expect("runner")
+        .trim_matches('"');
+    let mut words: Vec<&str> = runner.split_whitespace().collect();
+    assert_eq!(words.pop(), Some("-kernel"), "{runner}");
+    let out = Process::new(words[0])
+        .args(&words[1..])
+        .args(extra)
+        .arg("-kernel")
+        .arg(elf)
+        .output()
+        .expect("qemu-system-arm (installed by `cargo xtask test`)");
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        out.status.success(),
+        "{board} exited with {}:\n{text}\n{}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    text
+}
