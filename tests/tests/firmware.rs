@@ -8,14 +8,19 @@
 //! plain `cargo test`; `cargo xtask test` installs both and runs it.
 
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use tilerast::prelude::{AffineTexturing, ExactTexturing, QuadraticTexturing};
 use tilerast::texture::NEVER_SPLIT;
 use tilerast_fw::report::{scene_crc, Demo, Ssd1306, Teapot, TeapotCull};
 use tilerast_fw::workloads::{self, FILL_CMDS, LARGE_TRIANGLE_CMDS, LINE_CMDS, TRIANGLE_CMDS};
 
 mod qemu;
-use qemu::{build, export_scenes, run_with};
+use qemu::{build_with, export_scenes, run_with};
+
+/// Builds a board's firmware with `features` (its default ones for `None`).
+fn build(board: &str, scenes: &Path, features: Option<&str>) -> PathBuf {
+    build_with(board, scenes, features, false)
+}
 
 /// Runs a firmware ELF under QEMU; returns what it printed.
 fn run(board: &str, elf: &Path) -> String {

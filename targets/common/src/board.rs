@@ -29,6 +29,7 @@ struct SysTickClock {
 
 impl Clock for SysTickClock {
     fn lap(&mut self) -> u32 {
+        #[cfg(feature = "profile")]
         tilerast_lap();
         let now = SYST::get_current();
         let d = self.last.wrapping_sub(now) & 0x00FF_FFFF;
@@ -41,9 +42,11 @@ impl Clock for SysTickClock {
 /// the mark `qemu-prof` splits its instruction profile at, so each line's
 /// work (what was measured, and printing the line before) is one segment
 /// (`tests/qemu-prof/segprof.c`, `reports/profile.md`). One call a line,
-/// outside every timed section.
+/// outside every timed section. Feature `profile` only.
+#[cfg(feature = "profile")]
 struct Lines<W>(W);
 
+#[cfg(feature = "profile")]
 impl<W: Write> Write for Lines<W> {
     fn write_str(&mut self, s: &str) -> core::fmt::Result {
         self.0.write_str(s)?;
@@ -56,6 +59,7 @@ impl<W: Write> Write for Lines<W> {
 
 /// Does nothing, out of line under a name the profiler finds in the ELF:
 /// executing it marks the end of a report line.
+#[cfg(feature = "profile")]
 #[no_mangle]
 #[inline(never)]
 pub extern "C" fn tilerast_report_line() {
@@ -67,6 +71,7 @@ pub extern "C" fn tilerast_report_line() {
 /// splits there too, so it can tell the timed instructions (between a
 /// line's first and last lap) from the rest. Four instructions a lap; two
 /// `nop`s, so that the linker cannot fold it into the line's mark.
+#[cfg(feature = "profile")]
 #[no_mangle]
 #[inline(never)]
 pub extern "C" fn tilerast_lap() {
@@ -115,13 +120,16 @@ pub fn run<const ND: usize, const NS: usize, const BC: usize, const BT: usize>(
     ssd_tile: (u16, u16),
 ) -> ! {
     let _ = (demo_tile, ssd_tile);
-    let mut out = match hio::hstdout() {
-        Ok(o) => Lines(o),
+    let out = match hio::hstdout() {
+        Ok(o) => o,
         Err(()) => {
             debug::exit(debug::EXIT_FAILURE);
             loop {}
         }
     };
+    #[cfg(feature = "profile")]
+    let out = Lines(out);
+    let mut out = out;
     let Some(mut cp) = cortex_m::Peripherals::take() else {
         debug::exit(debug::EXIT_FAILURE);
         loop {}

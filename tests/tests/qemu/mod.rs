@@ -30,15 +30,25 @@ pub fn cargo() -> String {
     std::env::var("CARGO").unwrap_or_else(|_| "cargo".into())
 }
 
-/// Builds a board's firmware with `features` and returns the ELF path.
-pub fn build(board: &str, scenes: &Path, features: Option<&str>) -> PathBuf {
+/// Builds a board's firmware with `features` (its default ones for
+/// `None`), with the profiler's marks when `profile` (feature `profile`),
+/// and returns the ELF path.
+pub fn build_with(board: &str, scenes: &Path, features: Option<&str>, profile: bool) -> PathBuf {
     let dir = repo().join("targets").join(board);
     let mut cmd = Process::new(cargo());
     cmd.current_dir(&dir)
         .env("TILERAST_SCENES", scenes)
         .args(["build", "--release", "--quiet"]);
+    let mut list: Vec<&str> = vec![];
     if let Some(f) = features {
-        cmd.args(["--no-default-features", "--features", f]);
+        cmd.arg("--no-default-features");
+        list.push(f);
+    }
+    if profile {
+        list.push("profile");
+    }
+    if !list.is_empty() {
+        cmd.args(["--features", &list.join(",")]);
     }
     let st = cmd.status().expect("cargo");
     assert!(st.success(), "building {board} firmware failed");
