@@ -144,10 +144,10 @@ fn profile(board: &str, elf: &Path, lib: &Path) -> (Vec<Segment>, u64) {
     (segs, total)
 }
 
-/// A function's name as the report prints it: the path without the hash.
+/// A function's name as the report prints it: the core's paths without
+/// the crate's name (the demangler has already dropped the hash).
 fn short(name: &str) -> String {
-    let s = name.strip_prefix("tilerast::").unwrap_or(name);
-    s.replace("tilerast::", "")
+    name.replace("tilerast::", "")
 }
 
 /// The inline chain at each address, innermost first.

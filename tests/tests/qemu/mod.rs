@@ -26,7 +26,7 @@ pub fn export_scenes() -> PathBuf {
     dir
 }
 
-pub fn cargo() -> String {
+fn cargo() -> String {
     std::env::var("CARGO").unwrap_or_else(|_| "cargo".into())
 }
 
