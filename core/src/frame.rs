@@ -63,6 +63,35 @@ pub trait CommandSource {
     fn each(&self, mut f: impl FnMut(&Command)) -> Result<(), Error> {
         self.each_keyed(|_, c| f(c))
     }
+    /// Draws the commands of `keys` (as [`Self::replay`] takes them) into
+    /// `tile`, each as [`Tile::draw`] would; returns how many it drew. The
+    /// frame calls it for each binned tile. The default replays each
+    /// command; a source that can reach the tile more directly overrides
+    /// it — the geometry stage's [`Scene`](crate::geometry::Scene) hands
+    /// its mesh triangles over straight from the vertex cache.
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// let list = [Command::fill(Rect::new(0, 0, 4, 4), Rgb::new(9, 9, 9)),
+    ///             Command::fill(Rect::new(2, 2, 4, 4), Rgb::new(1, 2, 3))];
+    /// let mut tile: Tile<8, Rgb888Format> = Tile::new();
+    /// tile.begin(Rect::new(0, 0, 8, 8), &Clear::default())?;
+    /// assert_eq!(list[..].draw_keys([1].into_iter(), &mut tile), 1);
+    /// assert_eq!((tile.raw(0, 0), tile.raw(2, 2)), (Some(0), Some(0x010203)));
+    /// # Ok::<(), Error>(())
+    /// ```
+    fn draw_keys<const N: usize, C: TileConfig>(
+        &self,
+        keys: impl Iterator<Item = u32>,
+        tile: &mut Tile<N, C>,
+    ) -> u32 {
+        let mut n = 0;
+        self.replay(keys, |cmd| {
+            tile.draw_valid(cmd, self.textures());
+            n += 1;
+        });
+        n
+    }
     /// The textures the source's textured triangles index
     /// ([`WithTextures`]); none by default.
     fn textures(&self) -> &[crate::texture::Texture<'_>] {
@@ -527,6 +556,10 @@ impl Frame {
                     continue;
                 }
                 let mut replay = |tile: &mut Tile<N, C>| {
+                    if let (Some(slot), true) = (slot, UPTO == Phase::ALL) {
+                        stats.replayed += cmds.draw_keys(bins.keys(slot), tile);
+                        return;
+                    }
                     let draw = |cmd: &Command| {
                         if UPTO == Phase::Decode as u8 {
                             core::hint::black_box(cmd);

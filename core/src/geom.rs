@@ -292,6 +292,34 @@ pub(crate) fn pixel_bounds(v: &[Vertex; 3]) -> Option<Rect> {
     SubBox::of(v).pixels()
 }
 
+/// A vertex as the fused mesh path reads it, in place ([`crate::tile`]'s
+/// plane-contract path; the geometry stage's vertex cache is made of
+/// them): sub-pixel position (1/16 px, within the validated domain),
+/// 16-bit depth (smaller is nearer), 8-bit RGB, and a byte the producer
+/// keeps its own flags in (the raster ignores it). 16 bytes.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub(crate) struct MeshVertex {
+    pub x: i32,
+    pub y: i32,
+    pub z: u16,
+    pub rgb: [u8; 3],
+    pub code: u8,
+}
+
+impl MeshVertex {
+    /// The compact form of a command's vertex.
+    #[inline(always)]
+    pub(crate) fn of(v: &Vertex) -> Self {
+        MeshVertex {
+            x: v.x.to_bits(),
+            y: v.y.to_bits(),
+            z: v.z,
+            rgb: [v.color.r, v.color.g, v.color.b],
+            code: 0,
+        }
+    }
+}
+
 /// A triangle's box in sub-pixels, inclusive: made once per triangle and
 /// tile for both the choice of integer ([`crate::setup`]'s `fits_box`) and
 /// the pixel bounds (the two took 46 instructions a triangle apart on the

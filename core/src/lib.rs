@@ -129,7 +129,7 @@ pub mod prelude {
     pub use crate::geom::Rect;
     pub use crate::list::DisplayList;
     pub use crate::numeric::{
-        Bits, ColorFix, ColorStep, Coord, FullPrecision, Precision, ZFix, ZStep,
+        Bits, ColorFix, ColorStep, Coord, FullPrecision, PlaneContract, Precision, ZFix, ZStep,
     };
     pub use crate::raster::line::{LineCmd, LineStyle};
     pub use crate::texture::{

@@ -118,6 +118,9 @@ pub trait Precision: 'static {
     const COLOR_BITS: u32;
     /// Z fraction bits kept, `0..=14`.
     const Z_BITS: u32;
+    /// Whether opaque Gouraud triangles follow the **plane contract**
+    /// ([`PlaneContract`]) instead of the exact one.
+    const PLANE: bool = false;
 }
 
 /// A [`Precision`] of `C` colour and `Z` depth fraction bits (values above
@@ -132,6 +135,51 @@ impl<const C: u32, const Z: u32> Precision for Bits<C, Z> {
 
 /// Every fraction bit the DDAs have: 16 for colour, 14 for Z.
 pub type FullPrecision = Bits<COLOR_FRAC, Z_FRAC>;
+
+/// The **plane contract** for opaque Gouraud triangles: every fraction bit
+/// ([`FullPrecision`]), and attribute steps from *one* reciprocal of the
+/// triangle's doubled area instead of exactly rounded quotients — the
+/// cheaper of the two numeric contracts (`docs/contracts.md`).
+///
+/// Both contracts anchor each attribute at the top-left pixel of the
+/// triangle's box and evaluate `c + i gx + j gy` with wrapping 32-bit
+/// arithmetic, so both are invariant under tiling and bit-identical on every
+/// chip. They differ in the steps `gx`, `gy`:
+///
+/// - **exact** ([`FullPrecision`], [`Bits`]): `round(n / area2)`, the
+///   exactly rounded rational step;
+/// - **plane** (this type): with `area2`'s bit length `b`,
+///   `sh = max(0, b - 16)` and `r = floor((2^32 - 1) / (area2 >> sh))`
+///   (one 32-bit division a triangle), `(n r + 2^(31 + sh)) >> (32 + sh)`:
+///   one 32x32-bit product a step. `r` is within 2^-15 of `2^(32 + sh) /
+///   area2`, so a value strays from the exact one by at most 2^-15 of the
+///   attribute's change across the triangle's box, plus half a unit per step
+///   — under 2^-4 of an output unit in the domain below (tested,
+///   `tests/tests/contracts.rs`); after packing, a few fragments in ten
+///   thousand differ by one unit.
+///
+/// **Domain.** A triangle whose box is under 1024 px a side and whose every
+/// attribute changes by less than 2^28 units (`max |g| (w + h)`, checked
+/// by bit lengths) across its box takes the plane contract; others (slivers
+/// whose steps are huge, very large triangles) take the exact one. The
+/// choice depends on the triangle alone, never on the tile. Translucent,
+/// quadratic, textured and antialiased triangles keep the exact contract.
+///
+/// ```
+/// use tilerast::prelude::*;
+/// type Fast = Planes<Rgb565Format, Depth16, NoWid, NoDither, NoAa, PlaneContract>;
+/// assert!(<PlaneContract as Precision>::PLANE);
+/// assert!(!<FullPrecision as Precision>::PLANE);
+/// assert_eq!(Tile::<256, Fast>::bits_per_pixel(), 32); // no plane of its own
+/// ```
+#[derive(Debug, Clone, Copy, Default)]
+pub struct PlaneContract;
+
+impl Precision for PlaneContract {
+    const COLOR_BITS: u32 = COLOR_FRAC;
+    const Z_BITS: u32 = Z_FRAC;
+    const PLANE: bool = true;
+}
 
 /// Fraction bits of barycentric weights at span start.
 pub(crate) const W_FRAC: u32 = 30;

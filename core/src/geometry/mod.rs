@@ -77,11 +77,13 @@ pub(crate) use real::isqrt;
 pub use real::{Angle, Fx, Real};
 
 use crate::command::{Command, QuadVertex, State, Vertex};
+use crate::config::TileConfig;
 use crate::error::Error;
 use crate::format::Rgb;
 use crate::frame::CommandSource;
-use crate::geom::Rect;
+use crate::geom::{MeshVertex, Rect, SubBox};
 use crate::numeric::{Coord, COORD_LIMIT};
+use crate::tile::Tile;
 use clip::{ClipVertex, ALL};
 
 /// A box on screen: the pixels geometry inside a world-space box can
@@ -299,13 +301,10 @@ impl From<DrawError> for Error {
 /// ([`Scene::new`]); its contents are private.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct VertexSlot {
-    /// Sub-pixel position (valid when `code & ALL == 0`).
-    x: i32,
-    y: i32,
-    z: u16,
-    rgb: [u8; 3],
-    /// Outcode bits ([`clip`]); bit 7: a visible triangle uses it.
-    code: u8,
+    /// Sub-pixel position (valid when `code & ALL == 0`), depth, lit
+    /// colour, and in `code` the outcode bits ([`clip`]; bit 7: a visible
+    /// triangle uses it): what the tile's mesh path reads in place.
+    v: MeshVertex,
 }
 
 const USED: u8 = 0x80;
@@ -313,18 +312,21 @@ const USED: u8 = 0x80;
 impl VertexSlot {
     /// An empty slot, to initialise the array.
     pub const EMPTY: VertexSlot = VertexSlot {
-        x: 0,
-        y: 0,
-        z: 0,
-        rgb: [0; 3],
-        code: 0,
+        v: MeshVertex {
+            x: 0,
+            y: 0,
+            z: 0,
+            rgb: [0; 3],
+            code: 0,
+        },
     };
     fn vertex(&self) -> Vertex {
+        let v = &self.v;
         Vertex::new(
-            Coord::from_bits(self.x),
-            Coord::from_bits(self.y),
-            self.z,
-            Rgb::new(self.rgb[0], self.rgb[1], self.rgb[2]),
+            Coord::from_bits(v.x),
+            Coord::from_bits(v.y),
+            v.z,
+            Rgb::new(v.rgb[0], v.rgb[1], v.rgb[2]),
         )
     }
 }
@@ -550,13 +552,13 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
             *slot = VertexSlot::EMPTY;
             if code == 0 {
                 match vp.project(&p) {
-                    Some((x, y, z)) => (slot.x, slot.y, slot.z) = (x, y, z),
+                    Some((x, y, z)) => (slot.v.x, slot.v.y, slot.v.z) = (x, y, z),
                     // Inside the guard band yet not representable: only a
                     // w next to 0, i.e. a degenerate projection.
                     None => code = ALL,
                 }
             }
-            slot.code = code;
+            slot.v.code = code;
         }
         stats.vertices = nv as u32;
 
@@ -566,8 +568,8 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
             let idx = mesh.triangle(t);
             let v = idx.map(|i| &cache[i as usize]);
             let (or, and) = (
-                v[0].code | v[1].code | v[2].code,
-                v[0].code & v[1].code & v[2].code,
+                v[0].v.code | v[1].v.code | v[2].v.code,
+                v[0].v.code & v[1].v.code & v[2].v.code,
             );
             if and & ALL != 0 {
                 stats.outside += 1;
@@ -583,7 +585,7 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
                 stats.clipped += 1;
             }
             for i in idx {
-                cache[i as usize].code |= USED;
+                cache[i as usize].v.code |= USED;
             }
         }
 
@@ -594,13 +596,13 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
             let m = grp.material;
             for i in grp.first_vertex..grp.first_vertex + grp.vertices {
                 let slot = &mut cache[i as usize];
-                if slot.code & USED == 0 {
+                if slot.v.code & USED == 0 {
                     continue;
                 }
                 stats.lit += 1;
                 let kd = mesh.color(i).unwrap_or(m.kd);
                 let ka = if mesh.color(i).is_some() { kd } else { m.ka };
-                slot.rgb = match mesh.normal(i).filter(|_| opts.lit) {
+                slot.v.rgb = match mesh.normal(i).filter(|_| opts.lit) {
                     Some(n) => shade_vec(
                         n.map(|c| S::from_q(c as i64, 15)),
                         kd,
@@ -733,7 +735,7 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
             return None;
         }
         let c = self.cache.get(d.first as usize + i as usize)?;
-        (c.code & ALL == 0).then(|| c.vertex())
+        (c.v.code & ALL == 0).then(|| c.vertex())
     }
 
     /// Calls `f(key, command)` for the pieces of triangle `t` of draw `d`
@@ -749,8 +751,8 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
         let idx = mesh.triangle(t);
         let base = &self.cache[d.first as usize..];
         let v = idx.map(|i| &base[i as usize]);
-        let or = (v[0].code | v[1].code | v[2].code) & ALL;
-        let and = v[0].code & v[1].code & v[2].code & ALL;
+        let or = (v[0].v.code | v[1].v.code | v[2].v.code) & ALL;
+        let and = v[0].v.code & v[1].v.code & v[2].v.code & ALL;
         let key = (d.tri_base + t as u32) << 3;
         let state = tagged(mesh, &d.opts.state, t);
         let sign = front_sign(&d.opts);
@@ -775,7 +777,7 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
         // Clip in homogeneous space, then fan.
         let tri = core::array::from_fn(|k| ClipVertex {
             p: clip_position(mesh, &d.mvp, idx[k]),
-            c: v[k].rgb.map(|c| S::from_i32(c as i32)),
+            c: v[k].v.rgb.map(|c| S::from_i32(c as i32)),
         });
         let poly = clip::clip(tri, or, self.viewport.guard);
         if poly.n < 3 {
@@ -785,11 +787,13 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
             let (x, y, z) = self.viewport.project(&cv.p)?;
             let rgb = cv.c.map(|c| c.to_fixed(0).unwrap_or(0).clamp(0, 255) as u8);
             Some(VertexSlot {
-                x,
-                y,
-                z,
-                rgb,
-                code: 0,
+                v: MeshVertex {
+                    x,
+                    y,
+                    z,
+                    rgb,
+                    code: 0,
+                },
             })
         };
         let Some(a) = proj(&poly.v[0]) else { return };
@@ -880,8 +884,11 @@ fn clip_position<S: Real>(mesh: &Mesh<'_>, mvp: &Mat4<S>, i: u16) -> [S; 4] {
 /// Twice the signed screen area (y down), sub-pixels squared.
 #[inline]
 fn area(v: &[&VertexSlot; 3]) -> i64 {
-    let (ax, ay) = (v[0].x as i64, v[0].y as i64);
-    (v[1].x as i64 - ax) * (v[2].y as i64 - ay) - (v[1].y as i64 - ay) * (v[2].x as i64 - ax)
+    // Projected coordinates lie in the guard band (below 2^17 sub-pixels):
+    // differences fit `i32`, products are two 32x32-bit multiplies.
+    let d = |a: i32, b: i32| (a - b) as i64;
+    let (x0, y0) = (v[0].v.x, v[0].v.y);
+    d(v[1].v.x, x0) * d(v[2].v.y, y0) - d(v[1].v.y, y0) * d(v[2].v.x, x0)
 }
 
 /// The sign of [`area`] for a front face: counter-clockwise fronts (seen
@@ -1005,17 +1012,10 @@ fn powi<S: Real>(x: S, mut e: u8) -> S {
     acc
 }
 
-impl<S: Real, const D: usize> CommandSource for Scene<'_, S, D> {
-    fn each_keyed(&self, mut f: impl FnMut(u32, &Command)) -> Result<(), Error> {
-        for d in &self.draws {
-            for t in 0..d.mesh.triangles() {
-                self.emit(d, t, |_| true, &mut f);
-            }
-        }
-        Ok(())
-    }
-
-    fn replay(&self, keys: impl Iterator<Item = u32>, mut f: impl FnMut(&Command)) {
+impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
+    /// Calls `f(draw, triangle, piece)` for each of `keys` (increasing)
+    /// that names a triangle of a draw.
+    fn each_key(&self, keys: impl Iterator<Item = u32>, mut f: impl FnMut(&Draw<'a, S>, u16, u32)) {
         let mut di = 0;
         for key in keys {
             let tri = key >> 3;
@@ -1029,8 +1029,107 @@ impl<S: Real, const D: usize> CommandSource for Scene<'_, S, D> {
             if t >= d.mesh.triangles() as u32 {
                 continue;
             }
-            let piece = key & 7;
-            self.emit(d, t as u16, |p| p == piece, &mut |_, c| f(c));
+            f(d, t as u16, key & 7);
         }
+    }
+
+    /// Triangle `t` of draw `d` as it reaches the tile straight from the
+    /// vertex cache: its vertices and state, when it lies inside the guard
+    /// band and depth range (no clipping) and is Gouraud-shaded (fast
+    /// Phong's midpoints need the command path).
+    #[inline(always)]
+    fn direct(&self, d: &Draw<'a, S>, t: u16) -> Option<([&VertexSlot; 3], u16)> {
+        if d.opts.shading != Shading::Gouraud && d.opts.lit {
+            return None;
+        }
+        let base = &self.cache[d.first as usize..];
+        let v = d.mesh.triangle(t).map(|i| &base[i as usize]);
+        ((v[0].v.code | v[1].v.code | v[2].v.code) & ALL == 0).then_some((v, t))
+    }
+}
+
+impl<S: Real, const D: usize> CommandSource for Scene<'_, S, D> {
+    fn each_keyed(&self, mut f: impl FnMut(u32, &Command)) -> Result<(), Error> {
+        for d in &self.draws {
+            for t in 0..d.mesh.triangles() {
+                self.emit(d, t, |_| true, &mut f);
+            }
+        }
+        Ok(())
+    }
+
+    fn replay(&self, keys: impl Iterator<Item = u32>, mut f: impl FnMut(&Command)) {
+        self.each_key(keys, |d, t, piece| {
+            self.emit(d, t, |p| p == piece, &mut |_, c| f(c))
+        });
+    }
+
+    /// Binning reads each unclipped triangle's box and winding straight
+    /// from the vertex cache (no command is built); clipped triangles, and
+    /// frames with coverage antialiasing or a frame-level cull, go through
+    /// [`CommandSource::each_keyed`].
+    fn each_bounds(
+        &self,
+        cells: bool,
+        area: bool,
+        cull: Cull,
+        mut f: impl FnMut(u32, Option<Rect>),
+    ) -> Result<(), Error> {
+        if cells || cull != Cull::None {
+            return self.each_keyed(|k, c| f(k, crate::frame::bin_bounds(c, cells, area, cull)));
+        }
+        for d in &self.draws {
+            // Which signs of the doubled area are drawn ([`faces`]),
+            // decided once per draw rather than per triangle.
+            let front = front_sign(&d.opts);
+            let (pos, neg) = match d.opts.cull {
+                Cull::None => (true, true),
+                Cull::Back => (front > 0, front < 0),
+                Cull::Front => (front < 0, front > 0),
+            };
+            let base = &self.cache[d.first as usize..];
+            for t in 0..d.mesh.triangles() {
+                let v = d.mesh.triangle(t).map(|i| &base[i as usize]);
+                if v[0].v.code & v[1].v.code & v[2].v.code & ALL != 0 {
+                    continue;
+                }
+                if (v[0].v.code | v[1].v.code | v[2].v.code) & ALL == 0 {
+                    let a = self::area(&v);
+                    if (a > 0 && pos) || (a < 0 && neg) {
+                        let b = SubBox::of_points(v.map(|s| (s.v.x, s.v.y)));
+                        f((d.tri_base + t as u32) << 3, b.pixels());
+                    }
+                    continue;
+                }
+                self.emit(d, t, |_| true, &mut |k, c| {
+                    f(k, crate::frame::bin_bounds(c, cells, area, cull))
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Unclipped Gouraud triangles go from the vertex cache straight to
+    /// the tile ([`Tile::draw_mesh_triangle`](crate::tile::Tile)): no
+    /// command is built or decoded; binning has culled their back faces.
+    fn draw_keys<const N: usize, C: TileConfig>(
+        &self,
+        keys: impl Iterator<Item = u32>,
+        tile: &mut Tile<N, C>,
+    ) -> u32 {
+        let mut n = 0;
+        self.each_key(keys, |d, t, piece| {
+            if let (0, Some((v, t))) = (piece, self.direct(d, t)) {
+                let state = tagged(&d.mesh, &d.opts.state, t);
+                tile.draw_mesh_triangle(v.map(|s| &s.v), &state);
+                n += 1;
+                return;
+            }
+            self.emit(d, t, |p| p == piece, &mut |_, c| {
+                tile.draw_valid(c, &[]);
+                n += 1;
+            });
+        });
+        n
     }
 }

@@ -17,7 +17,7 @@ use crate::format::{ColorPlane, Lanes, PixelFormat, Rgb};
 use crate::fragment::dither::{round_bias, Dither};
 use crate::fragment::{BlendMode, DepthMode, DepthPlane, ShadingMode, WidMode, WidPlane};
 use crate::geom::cell_bounds;
-use crate::geom::{Rect, SubBox};
+use crate::geom::{MeshVertex, Rect, SubBox};
 use crate::numeric::{
     ends_in, ones_abs, steps_bounded, Precision, CLAMP_FREE_SPANS, SUBPIXEL as SUBPIXEL_I64, Z_FRAC,
 };
@@ -243,6 +243,11 @@ where
             } else {
                 self.gouraud_area::<i64>(v, st)
             };
+        }
+        if Self::plane_path(st)
+            && self.plane_triangle(v.each_ref().map(MeshVertex::of).each_ref(), st)
+        {
+            return;
         }
         // Borrowed where it was returned: moved out of the `Option`, the
         // setup was copied once more per triangle and tile (184
@@ -1059,7 +1064,7 @@ where
     /// [`Self::span`], with `QUAD`: the colour step `s.dc` grows by `ddc`
     /// every pixel.
     #[inline(always)]
-    fn span_with<const QUAD: bool>(
+    pub(crate) fn span_with<const QUAD: bool>(
         &mut self,
         x: i64,
         y: i64,

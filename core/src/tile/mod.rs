@@ -7,6 +7,7 @@
 //! the exact cost) and their per-pixel test is the constant `true`.
 
 mod draw;
+mod mesh;
 
 use crate::command::State;
 use crate::config::TileConfig;

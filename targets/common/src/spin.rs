@@ -22,7 +22,7 @@ use tilerast::prelude::*;
 /// Screen side, pixels.
 pub const SIDE: u16 = 240;
 /// The tile's planes: RGB565 + 16-bit Z, as on an ST7789.
-pub type SpinConfig = Planes<Rgb565Format, Depth16, NoWid, NoDither>;
+pub type SpinConfig = Planes<Rgb565Format, Depth16, NoWid, NoDither, NoAa, PlaneContract>;
 /// Background.
 pub const BACKGROUND: Rgb = Rgb::new(16, 24, 48);
 

@@ -302,6 +302,13 @@ pub type TexBench<X> = Planes<
     X,
 >;
 
+/// The Gouraud + Z workloads under the plane contract
+/// ([`PlaneContract`]): the cost axis of the numeric contracts' trade-off.
+pub type PlaneZBench = Planes<Rgb565Format, Depth16, NoWid, NoDither, NoAa, PlaneContract>;
+
+/// The same with window ID and 8x8 dither.
+pub type PlaneZWidDitherBench = Planes<Rgb565Format, Depth16, Wid8, Bayer8, NoAa, PlaneContract>;
+
 /// The tile configuration of the translucent workload ([`LARGE_BLEND_CMDS`]):
 /// RGB565 + Z16 with blending compiled in.
 pub type BlendBench =

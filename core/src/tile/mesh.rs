@@ -1,0 +1,534 @@
+//! Mesh triangles under the **plane contract**
+//! ([`PlaneContract`](crate::numeric::PlaneContract)): setup,
+//! traversal and the row starts of an opaque Gouraud triangle in one routine
+//! whose state stays in 32-bit integers, from three compact vertices
+//! ([`MeshVertex`]) — what the geometry stage's vertex cache holds, so a
+//! mesh triangle reaches the tile without a command being built, decoded or
+//! validated ([`crate::geometry`]).
+//!
+//! Per (tile, triangle) pair:
+//!
+//! 1. the triangle's pixel box (pixel centres `16 p + 8` inside its
+//!    sub-pixel box), clipped to the tile: an empty one costs nothing more;
+//! 2. the three edge functions of [`crate::setup`] (same orientation, same
+//!    top-left rule), relative to the clipped box's first pixel centre;
+//! 3. each row's covered run `[xl, xr)` straight from the edges: one floor
+//!    division per edge with a slope (a divide instruction on every chip
+//!    but the Cortex-M0, where the small quotients rows give take a few
+//!    subtractions); exactly the pixels the traversal
+//!    (`crate::raster::traverse`) finds;
+//! 4. at the first covered row, and only then, the attribute planes: one
+//!    reciprocal of the doubled area and one 32x32-bit product a step
+//!    ([`PlaneContract`](crate::numeric::PlaneContract)), anchored at the top-left pixel of the
+//!    triangle's own box, so a row's start `c + i gx + j gy` (wrapping
+//!    `i32`) is the same whichever tile asks;
+//! 5. each row through the tile's span loop (window ID, Z, dither, pack,
+//!    plane mask, store: the one store path).
+//!
+//! A triangle outside the contract's domain returns `false` before any
+//! pixel is drawn, and the caller draws it under the exact contract.
+
+use super::Tile;
+use crate::command::{Command, State, Vertex};
+use crate::config::TileConfig;
+use crate::format::{Lanes, PixelFormat, Rgb};
+use crate::fragment::dither::Dither;
+use crate::fragment::{BlendMode, DepthMode, ShadingMode, WidMode};
+use crate::geom::{pixel_span, MeshVertex};
+use crate::numeric::{div_floor_i32, Coord, Precision, SUBPIXEL_BITS, Z_FRAC};
+use crate::raster::coverage::AaMode;
+use crate::raster::span::SpanStart;
+use crate::setup::SMALL_EXTENT;
+use crate::texture::TextureMode;
+
+/// One edge as the fused path walks it: `E - bias = a k + n` along a row
+/// (`k` pixels right of the clipped box's first column), `n` growing by `s`
+/// each row; inside when `a k + n >= 0` (the top-left rule's bias folded
+/// into `n`).
+#[derive(Clone, Copy)]
+struct Edge {
+    a: i32,
+    n: i32,
+    s: i32,
+}
+
+impl Edge {
+    /// The edge from `p` to `q` relative to the sub-pixel point `(ox, oy)`.
+    #[inline(always)]
+    fn new(p: (i32, i32), q: (i32, i32), (ox, oy): (i32, i32)) -> Edge {
+        let (dx, dy) = (q.0 - p.0, q.1 - p.1);
+        let top_left = dy < 0 || (dy == 0 && dx > 0);
+        Edge {
+            a: -dy << SUBPIXEL_BITS,
+            n: dx * (oy - p.1) - dy * (ox - p.0) - (!top_left) as i32,
+            s: dx << SUBPIXEL_BITS,
+        }
+    }
+
+    /// Narrows the row's run `[lo, hi)` to this edge's side of it.
+    #[inline(always)]
+    fn clip(&self, lo: &mut i32, hi: &mut i32) {
+        let n = self.n;
+        if self.a > 0 {
+            // a k + n >= 0  <=>  k >= ceil(-n / a) = -floor(n / a).
+            *lo = (*lo).max(-div_floor_i32(n, self.a));
+        } else if self.a < 0 {
+            // k <= floor(n / -a).
+            *hi = (*hi).min(div_floor_i32(n, -self.a) + 1);
+        } else if n < 0 {
+            *hi = *lo;
+        }
+    }
+}
+
+/// One attribute's plane: value at the anchor pixel, steps per pixel and
+/// per row (wrapping `i32`).
+#[derive(Clone, Copy)]
+struct Plane {
+    c: i32,
+    gx: i32,
+    gy: i32,
+}
+
+/// What every attribute's plane shares: the barycentric weights' steps
+/// and the anchor's offset from vertex 0.
+struct Recip {
+    /// Steps of the weights of vertices 1 and 2 per pixel (`x`) and per
+    /// row (`y`), 30 fraction bits.
+    wx: (i32, i32),
+    wy: (i32, i32),
+    /// Anchor centre minus vertex 0, sub-pixels.
+    o: (i32, i32),
+}
+
+/// Doubled areas (sub-pixels squared) the plane contract's reciprocal
+/// serves: below 2^16 (triangles under 128 square pixels).
+pub(crate) const PLANE_AREA_LIMIT: i32 = 1 << 16;
+
+/// Fraction bits of the weights' steps.
+const W_BITS: u32 = 30;
+
+/// `floor((2^46 - 1) / a)` for `0 < a < 2^16`, by three 32-bit divisions
+/// (16-bit digits of long division): at least 2^30, so within 2^-30 of
+/// `2^46 / a`.
+#[inline(always)]
+pub(crate) fn reciprocal46(a: u32) -> u64 {
+    debug_assert!(a > 0 && a < PLANE_AREA_LIMIT as u32);
+    const HI: u32 = (1 << 14) - 1;
+    let q1 = HI / a;
+    let n2 = ((HI - q1 * a) << 16) | 0xffff;
+    let q2 = n2 / a;
+    let q3 = (((n2 - q2 * a) << 16) | 0xffff) / a;
+    (q1 as u64) << 32 | (q2 as u64) << 16 | q3 as u64
+}
+
+impl Recip {
+    /// From the doubled area and the steps of the edges opposite vertices
+    /// 1 and 2 per pixel (`a`) and per row (`s`): each weight's step
+    /// `round(k r / 2^16)`, `k / area2` with 30 fraction bits; `None` when
+    /// a weight changes by 2 or more a pixel or a row (`|k| >= 2 area2`: a
+    /// sliver, outside the contract's domain; below it `k r < 2^47`).
+    #[inline(always)]
+    fn new(area2: i32, a: (i32, i32), s: (i32, i32), o: (i32, i32)) -> Option<Recip> {
+        let lim = 2 * area2 as u32;
+        if (a.0.unsigned_abs() | a.1.unsigned_abs() | s.0.unsigned_abs() | s.1.unsigned_abs())
+            >= lim
+        {
+            // (An OR of the magnitudes is at least their largest.)
+            return None;
+        }
+        let r = reciprocal46(area2 as u32) as i64;
+        let w = |k: i32| ((k as i64 * r + (1 << 15)) >> (46 - W_BITS)) as i32;
+        Some(Recip {
+            wx: (w(a.0), w(a.1)),
+            wy: (w(s.0), w(s.1)),
+            o,
+        })
+    }
+
+    /// Whether the weights change by less than 2^8 across a box of
+    /// `extent` (width plus height) pixels: the domain, where a value's
+    /// error stays below `2^8 |d| 2^-30` (`|d|` the attribute's largest
+    /// difference between vertices, in its DDA units) plus the steps'
+    /// rounding — under 1/64 of a depth unit.
+    #[inline(always)]
+    fn conditioned(&self, extent: u32) -> bool {
+        let m = self.wx.0.unsigned_abs()
+            | self.wx.1.unsigned_abs()
+            | self.wy.0.unsigned_abs()
+            | self.wy.1.unsigned_abs();
+        (32 - m.leading_zeros()) + (32 - extent.leading_zeros()) <= W_BITS + 8
+    }
+
+    /// The plane of an attribute worth `a0` at vertex 0 and `a0 + d1`,
+    /// `a0 + d2` at the (oriented) others: steps `round(d1 w1 + d2 w2)`
+    /// (two 32x32-bit products), and the anchor's value through them.
+    #[inline(always)]
+    fn plane(&self, a0: i32, d1: i32, d2: i32) -> Plane {
+        let g = |w: (i32, i32)| {
+            (d1 as i64 * w.0 as i64 + d2 as i64 * w.1 as i64 + (1 << (W_BITS - 1))) >> W_BITS
+        };
+        let (gx, gy) = (g(self.wx), g(self.wy));
+        // The anchor's value through the steps (as the exact contract's
+        // small triangles: `crate::setup`): wrapping 64-bit products of the
+        // whole steps, whose shifted low 32 bits are exact modulo 2^32 (a
+        // sliver's step may not fit `i32`; the values inside it do).
+        let off = gx
+            .wrapping_mul(self.o.0 as i64)
+            .wrapping_add(gy.wrapping_mul(self.o.1 as i64))
+            .wrapping_add(1 << (SUBPIXEL_BITS - 1))
+            >> SUBPIXEL_BITS;
+        Plane {
+            c: a0.wrapping_add(off as i32),
+            gx: gx as i32,
+            gy: gy as i32,
+        }
+    }
+}
+
+impl<const N: usize, C, F, Z, W, D, A, P, B, S, X> Tile<N, C>
+where
+    C: TileConfig<
+        Format = F,
+        Depth = Z,
+        Wid = W,
+        Dither = D,
+        Aa = A,
+        Precision = P,
+        Blending = B,
+        Shading = S,
+        Texturing = X,
+    >,
+    F: PixelFormat,
+    Z: DepthMode,
+    W: WidMode,
+    D: Dither,
+    A: AaMode,
+    P: Precision,
+    B: BlendMode,
+    S: ShadingMode,
+    X: TextureMode,
+{
+    /// Whether an opaque Gouraud triangle with state `st` takes the plane
+    /// contract's path in this configuration.
+    #[inline(always)]
+    pub(crate) fn plane_path(st: &State) -> bool {
+        P::PLANE && A::SAMPLES == 0 && !(B::ALPHA && st.blend.translucent())
+    }
+
+    /// Draws a mesh triangle from its compact vertices with state `st`,
+    /// as [`Tile::draw`] draws the [`Command::Triangle`] of the same
+    /// vertices: under the plane contract when the configuration chooses it
+    /// and the triangle is in its domain, else through the command path.
+    #[inline(always)]
+    pub(crate) fn draw_mesh_triangle(&mut self, v: [&MeshVertex; 3], st: &State) {
+        if Self::plane_path(st) && self.plane_triangle(v, st) {
+            return;
+        }
+        let v = v.map(|v| {
+            Vertex::new(
+                Coord::from_bits(v.x),
+                Coord::from_bits(v.y),
+                v.z,
+                Rgb::new(v.rgb[0], v.rgb[1], v.rgb[2]),
+            )
+        });
+        self.draw_valid(&Command::Triangle { v, state: *st }, &[]);
+    }
+
+    /// Draws the opaque Gouraud triangle `v` under the plane contract
+    /// ([module docs](self)); `false`, with nothing drawn, when the
+    /// triangle lies outside the contract's domain. Vertex coordinates lie
+    /// in the validated domain (`|x|, |y| < 2^17` sub-pixels).
+    #[inline(never)]
+    pub(crate) fn plane_triangle(&mut self, v: [&MeshVertex; 3], st: &State) -> bool {
+        let (x0, x1) = (
+            v[0].x.min(v[1].x).min(v[2].x),
+            v[0].x.max(v[1].x).max(v[2].x),
+        );
+        let (y0, y1) = (
+            v[0].y.min(v[1].y).min(v[2].y),
+            v[0].y.max(v[1].y).max(v[2].y),
+        );
+        if (x1 - x0) as i64 >= SMALL_EXTENT || (y1 - y0) as i64 >= SMALL_EXTENT {
+            return false;
+        }
+        // The triangle's pixel box (its anchor is the top-left), then
+        // clipped to the tile.
+        let (bx0, bx1) = pixel_span(x0, x1);
+        let (by0, by1) = pixel_span(y0, y1);
+        let t = self.area;
+        let (cx0, cx1) = (bx0.max(t.x), bx1.min(t.x + t.w as i32 - 1));
+        let (cy0, cy1) = (by0.max(t.y), by1.min(t.y + t.h as i32 - 1));
+        if cx0 > cx1 || cy0 > cy1 {
+            return true;
+        }
+        // Orientation: the inside is where every edge is `>= bias`.
+        let (p0, mut p1, mut p2) = ((v[0].x, v[0].y), (v[1].x, v[1].y), (v[2].x, v[2].y));
+        let (mut i1, mut i2) = (1, 2);
+        let mut area2 = (p1.0 - p0.0) * (p2.1 - p0.1) - (p1.1 - p0.1) * (p2.0 - p0.0);
+        if area2 == 0 {
+            return true;
+        }
+        if area2 < 0 {
+            core::mem::swap(&mut p1, &mut p2);
+            (i1, i2) = (2, 1);
+            area2 = -area2;
+        }
+        if area2 >= PLANE_AREA_LIMIT {
+            return false;
+        }
+        let half = 1 << (SUBPIXEL_BITS - 1);
+        let o = ((cx0 << SUBPIXEL_BITS) + half, (cy0 << SUBPIXEL_BITS) + half);
+        let mut e = [
+            Edge::new(p1, p2, o),
+            Edge::new(p2, p0, o),
+            Edge::new(p0, p1, o),
+        ];
+        let width = cx1 - cx0 + 1;
+        let mut py = cy0;
+        // Rows above the first covered one: edges only.
+        let (mut lo, mut hi);
+        loop {
+            (lo, hi) = (0, width);
+            for e in &e {
+                e.clip(&mut lo, &mut hi);
+            }
+            if lo < hi {
+                break;
+            }
+            if py == cy1 {
+                return true;
+            }
+            py += 1;
+            for e in &mut e {
+                e.n += e.s;
+            }
+        }
+        // The first covered row: the attribute planes.
+        let o = (
+            (bx0 << SUBPIXEL_BITS) + half - p0.0,
+            (by0 << SUBPIXEL_BITS) + half - p0.1,
+        );
+        let Some(rc) = Recip::new(area2, (e[1].a, e[2].a), (e[1].s, e[2].s), o) else {
+            return false;
+        };
+        if !rc.conditioned(((bx1 - bx0) + (by1 - by0) + 2) as u32) {
+            return false;
+        }
+        let lanes = |k: usize| F::lanes_from_rgb8(v[k].rgb);
+        let (l0, l1, l2) = (lanes(0), lanes(i1), lanes(i2));
+        let mut cp = [Plane { c: 0, gx: 0, gy: 0 }; 4];
+        for (i, p) in cp.iter_mut().enumerate().take(F::Lanes::LEN) {
+            let c0 = l0.lane(i);
+            *p = rc.plane(c0, l1.lane(i) - c0, l2.lane(i) - c0);
+        }
+        let zl = |k: usize| (v[k].z as i32) << Z_FRAC;
+        let zp = rc.plane(zl(0), zl(i1) - zl(0), zl(i2) - zl(0));
+        let dc = F::Lanes::from_fn(|i| cp[i].gx);
+        loop {
+            if lo < hi {
+                let (i, j) = (cx0 + lo - bx0, py - by0);
+                let at = |p: &Plane| {
+                    p.c.wrapping_add(j.wrapping_mul(p.gy))
+                        .wrapping_add(i.wrapping_mul(p.gx))
+                };
+                let s = SpanStart {
+                    c: F::Lanes::from_fn(|k| at(&cp[k])),
+                    dc,
+                    z: at(&zp),
+                    dz: zp.gx,
+                };
+                self.span_with::<false>((cx0 + lo) as i64, py as i64, (hi - lo) as i64, s, dc, st);
+            }
+            if py == cy1 {
+                return true;
+            }
+            py += 1;
+            (lo, hi) = (0, width);
+            for e in &mut e {
+                e.n += e.s;
+                e.clip(&mut lo, &mut hi);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Planes;
+    use crate::format::Rgb888Format;
+    use crate::fragment::dither::NoDither;
+    use crate::fragment::{Depth16, NoWid};
+    use crate::geom::Rect;
+    use crate::numeric::{xorshift, FullPrecision, PlaneContract};
+    use crate::raster::coverage::NoAa;
+    use crate::tile::Clear;
+
+    type Exact = Planes<Rgb888Format, Depth16, NoWid, NoDither, NoAa, FullPrecision>;
+    type Fast = Planes<Rgb888Format, Depth16, NoWid, NoDither, NoAa, PlaneContract>;
+    const SIDE: u32 = 48;
+    const CAP: usize = (SIDE * SIDE / 8) as usize;
+
+    fn abs(v: f64) -> f64 {
+        if v < 0.0 {
+            -v
+        } else {
+            v
+        }
+    }
+
+    /// A random triangle over a `SIDE` square and a little beyond: most
+    /// small (a mesh's), some tiny or slivers, some large.
+    fn triangle(next: &mut impl FnMut() -> u64) -> [MeshVertex; 3] {
+        let span = match next() % 8 {
+            0 => 16 * 4,
+            1 => 16 * 200,
+            2 | 3 => 16 * 64,
+            _ => 16 * 20,
+        };
+        core::array::from_fn(|_| MeshVertex {
+            x: (next() % span) as i32 - 64,
+            y: (next() % span) as i32 - 64,
+            z: (next() % 60000) as u16,
+            rgb: [next() as u8, next() as u8, next() as u8],
+            code: 0,
+        })
+    }
+
+    fn vertices(v: &[MeshVertex; 3]) -> [Vertex; 3] {
+        v.map(|v| {
+            Vertex::new(
+                Coord::from_bits(v.x),
+                Coord::from_bits(v.y),
+                v.z,
+                Rgb::new(v.rgb[0], v.rgb[1], v.rgb[2]),
+            )
+        })
+    }
+
+    /// The exact rational colour and depth at pixel centre `(px, py)`.
+    fn reference(v: &[MeshVertex; 3], px: i32, py: i32) -> ([f64; 3], f64) {
+        let (x, y) = (16.0 * px as f64 + 8.0, 16.0 * py as f64 + 8.0);
+        let p = v.map(|v| (v.x as f64, v.y as f64));
+        let cross = |a: (f64, f64), b: (f64, f64), c: (f64, f64)| {
+            (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0)
+        };
+        let area = cross(p[0], p[1], p[2]);
+        let w1 = cross(p[0], (x, y), p[2]) / area;
+        let w2 = cross(p[0], p[1], (x, y)) / area;
+        let w0 = 1.0 - w1 - w2;
+        let lerp = |f: &dyn Fn(&MeshVertex) -> f64| w0 * f(&v[0]) + w1 * f(&v[1]) + w2 * f(&v[2]);
+        (
+            core::array::from_fn(|k| lerp(&|v| v.rgb[k] as f64)),
+            lerp(&|v| v.z as f64),
+        )
+    }
+
+    /// Under the plane contract: the same pixels as the exact contract's
+    /// traversal, every colour within 0.5 + 2^-4 of the exact rational
+    /// value (to nearest, no dither) and every depth within 0.5 + 2^-4 —
+    /// the bound the contract documents — and the same output in 4
+    /// tiles as in one; triangles outside its domain are drawn exactly.
+    #[test]
+    fn plane_contract_covers_exactly_within_its_bound() {
+        let mut next = xorshift(0x9e37_79b9_7f4a_7c15);
+        let whole = Rect::new(0, 0, SIDE, SIDE);
+        let (mut fast_tris, mut exact_tris, mut fragments, mut differ) = (0, 0, 0u32, 0u32);
+        let mut worst = 0.0f64;
+        for _ in 0..3000 {
+            let v = triangle(&mut next);
+            let st = State::default();
+            let mut exact: Tile<CAP, Exact> = Tile::new();
+            exact.begin(whole, &Clear::default()).unwrap();
+            exact
+                .draw(&Command::Triangle {
+                    v: vertices(&v),
+                    state: st,
+                })
+                .ok();
+            let mut fast: Tile<CAP, Fast> = Tile::new();
+            fast.begin(whole, &Clear::default()).unwrap();
+            let in_domain = fast.plane_triangle([&v[0], &v[1], &v[2]], &st);
+            if !in_domain {
+                exact_tris += 1;
+                fast.draw(&Command::Triangle {
+                    v: vertices(&v),
+                    state: st,
+                })
+                .ok();
+            } else {
+                fast_tris += 1;
+            }
+            // Tiling invariance: four quarter tiles.
+            let h = SIDE / 2;
+            for (tx, ty) in [(0, 0), (h, 0), (0, h), (h, h)] {
+                let mut q: Tile<CAP, Fast> = Tile::new();
+                q.begin(Rect::new(tx as i32, ty as i32, h, h), &Clear::default())
+                    .unwrap();
+                q.draw(&Command::Triangle {
+                    v: vertices(&v),
+                    state: st,
+                })
+                .ok();
+                for y in ty as i32..(ty + h) as i32 {
+                    for x in tx as i32..(tx + h) as i32 {
+                        assert_eq!(q.raw(x, y), fast.raw(x, y), "tiling {v:?} at {x},{y}");
+                        assert_eq!(q.depth(x, y), fast.depth(x, y), "tiling {v:?}");
+                    }
+                }
+            }
+            for y in 0..SIDE as i32 {
+                for x in 0..SIDE as i32 {
+                    let covered = exact.depth(x, y) != Some(u16::MAX);
+                    assert_eq!(
+                        covered,
+                        fast.depth(x, y) != Some(u16::MAX),
+                        "coverage {v:?} at {x},{y}"
+                    );
+                    if !covered {
+                        continue;
+                    }
+                    fragments += 1;
+                    differ += (exact.raw(x, y) != fast.raw(x, y)) as u32;
+                    if !in_domain {
+                        assert_eq!(exact.raw(x, y), fast.raw(x, y));
+                        continue;
+                    }
+                    let (c, z) = reference(&v, x, y);
+                    let raw = fast.raw(x, y).unwrap();
+                    for (k, c) in c.iter().enumerate() {
+                        let out = (raw >> (16 - 8 * k)) & 0xff;
+                        let e = abs(out as f64 - c);
+                        worst = worst.max(e);
+                        assert!(
+                            e <= 0.5 + 1.0 / 16.0,
+                            "colour {v:?} at {x},{y}: {out} vs {c}"
+                        );
+                    }
+                    let dz = abs(fast.depth(x, y).unwrap() as f64 - z);
+                    assert!(dz <= 0.5 + 1.0 / 16.0, "depth {v:?} at {x},{y}: {dz}");
+                }
+            }
+        }
+        // Most triangles are in the domain; some fragments differ by
+        // rounding, few.
+        assert!(
+            fast_tris > 700 && exact_tris > 300,
+            "{fast_tris} / {exact_tris}"
+        );
+        assert!(differ * 100 < fragments, "{differ} of {fragments} differ");
+        assert!(worst > 0.4, "{worst}"); // the check measured something
+    }
+    /// The reciprocal's three 32-bit divisions equal one 64-bit division.
+    #[test]
+    fn reciprocal46_is_the_64_bit_quotient() {
+        for a in (1..PLANE_AREA_LIMIT as u32)
+            .step_by(7)
+            .chain([1, 2, 3, 65535])
+        {
+            assert_eq!(reciprocal46(a), ((1u64 << 46) - 1) / a as u64, "{a}");
+        }
+    }
+}
