@@ -15,7 +15,7 @@ use tilerast_fw::report::{scene_crc, Demo, Ssd1306, Teapot, TeapotCull};
 use tilerast_fw::workloads::{self, FILL_CMDS, LARGE_TRIANGLE_CMDS, LINE_CMDS, TRIANGLE_CMDS};
 
 mod qemu;
-use qemu::{build_with, export_scenes, run_with};
+use qemu::{build_for, build_with, export_scenes, run_with};
 
 /// Builds a board's firmware with `features` (its default ones for `None`).
 fn build(board: &str, scenes: &Path, features: Option<&str>) -> PathBuf {
@@ -525,35 +525,7 @@ fn firmware_output_is_bit_identical_to_the_host() {
         }
         // The rotating mesh, frame by frame; the other back end's vertex
         // stage, hashed.
-        assert!(
-            r.spins.len() >= 8 && r.geoms.len() >= 4,
-            "{board}: spin frames missing:\n{out}"
-        );
-        let spin_tile = r.scenes["demo"].tile;
-        for l in &r.geoms {
-            let host = host_geom_hash(&scenes, l);
-            assert_eq!(
-                l.hash, host,
-                "{board} geom {} {} frame {}/{}: hash 0x{:08x}, host 0x{host:08x}",
-                l.mesh, l.backend, l.frame, l.frames, l.hash
-            );
-        }
-        for l in &r.spins {
-            let host = host_spin_crc(&scenes, l, spin_tile);
-            assert_eq!(
-                l.crc, host,
-                "{board} spin {} {} frame {}/{}: CRC 0x{:08x}, host 0x{host:08x}",
-                l.mesh, l.backend, l.frame, l.frames, l.crc
-            );
-        }
-        println!(
-            "{board:>10} spin: {} frames of {} ({}), {} vertex stages ({}): every CRC and hash = host",
-            r.spins.len(),
-            r.spins[0].mesh,
-            r.spins[0].backend,
-            r.geoms.len(),
-            r.geoms[0].backend
-        );
+        check_spins(board, &r, &scenes, r.scenes["demo"].tile, &out);
         // The volume (the MPS2 only: 128 KB of volume in RAM), both modes
         // bit for bit; a build without it carries none of the volume stage.
         if board == "mps2-an386" {
@@ -631,10 +603,58 @@ fn firmware_output_is_bit_identical_to_the_host() {
             report: r,
         });
     }
+    // Cortex-M0-class code (`thumbv6m`) on the MPS2 board: the rotating
+    // teapot, which the micro:bit cannot hold (an RP2040-class workload),
+    // in fixed point, bit for bit as the host's.
+    let elf = build_for(
+        "mps2-an386",
+        Some("thumbv6m-none-eabi"),
+        &scenes,
+        Some("spin"),
+        false,
+    );
+    let out = run("mps2-an386", &elf);
+    let mut v6 = parse(&out);
+    v6.board = "mps2-an386, ARMv6-M code".into();
+    let tile = reports[0].report.scenes["demo"].tile;
+    check_spins("mps2-an386 (thumbv6m)", &v6, &scenes, tile, &out);
     if let Some(path) = std::env::var_os("TILERAST_REPORT") {
-        std::fs::write(&path, report(&reports)).unwrap();
+        std::fs::write(&path, report(&reports, &v6)).unwrap();
         println!("wrote {}", Path::new(&path).display());
     }
+}
+
+/// Asserts a board's rotating-mesh frames and vertex stages equal the
+/// host's, frame by frame.
+fn check_spins(board: &str, r: &Report, scenes: &Path, spin_tile: (u16, u16), out: &str) {
+    assert!(
+        r.spins.len() >= 8 && r.geoms.len() >= 4,
+        "{board}: spin frames missing:\n{out}"
+    );
+    for l in &r.geoms {
+        let host = host_geom_hash(scenes, l);
+        assert_eq!(
+            l.hash, host,
+            "{board} geom {} {} frame {}/{}: hash 0x{:08x}, host 0x{host:08x}",
+            l.mesh, l.backend, l.frame, l.frames, l.hash
+        );
+    }
+    for l in &r.spins {
+        let host = host_spin_crc(scenes, l, spin_tile);
+        assert_eq!(
+            l.crc, host,
+            "{board} spin {} {} frame {}/{}: CRC 0x{:08x}, host 0x{host:08x}",
+            l.mesh, l.backend, l.frame, l.frames, l.crc
+        );
+    }
+    println!(
+        "{board:>10} spin: {} frames of {} ({}), {} vertex stages ({}): every CRC and hash = host",
+        r.spins.len(),
+        r.spins[0].mesh,
+        r.spins[0].backend,
+        r.geoms.len(),
+        r.geoms[0].backend
+    );
 }
 
 /// A board's report with the sizes of its full and minimal builds.
@@ -665,7 +685,7 @@ fn table_rows(boards: &[&Report], rows: &[(&str, &str, u64)]) -> String {
     md
 }
 
-fn report(reports: &[BoardResult]) -> String {
+fn report(reports: &[BoardResult], v6: &Report) -> String {
     let tri_px = workloads::covered_pixels(&TRIANGLE_CMDS, workloads::SIDE).unwrap();
     let fill_px = workloads::covered_pixels(&FILL_CMDS, workloads::SIDE).unwrap();
     let eg_px = workloads::eg_covered_pixels(&TRIANGLE_CMDS);
@@ -911,7 +931,9 @@ fn report(reports: &[BoardResult]) -> String {
             );
         }
     }
-    md += &spin_section(&boards);
+    let mut spin_boards = boards.clone();
+    spin_boards.insert(1, v6);
+    md += &spin_section(&spin_boards);
     for b in &boards {
         let (Some(out), Some(inp)) = (b.anim.get("output"), b.anim.get("input")) else {
             continue;
@@ -1051,7 +1073,10 @@ fn spin_section(boards: &[&Report]) -> String {
          pipeline bins it (reading the vertex cache, no command built) and draws each triangle \
          straight from the cache into the tile under the plane contract (`PlaneContract`: one \
          reciprocal a triangle, `tilerast::tile`'s mesh path) at 240x240, RGB565 + Z16, in tiles \
-         of the demo's size (64x32 = 8 KB on the Cortex-M4, 32x32 on the M0). One full turn \
+         of the demo's size (64x32 = 8 KB on the Cortex-M4, 32x32 on the M0). *ARMv6-M code*: \
+         the teapot built for `thumbv6m-none-eabi` (Cortex-M0 class, fixed point, no FPU) and \
+         run on the MPS2 board, whose RAM and flash hold a mesh the micro:bit cannot (an \
+         RP2040-class workload): the same instructions an M0 runs. One full turn \
          about y, tilted 20°. \
          Every frame's CRC equals the host's (asserted). Millions of instructions per frame, \
          averaged over the frames; per vertex = vertex stage / vertices.\n\n\

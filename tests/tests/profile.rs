@@ -260,7 +260,7 @@ fn top(counts: &BTreeMap<String, u64>, n: usize) -> Vec<(&String, u64)> {
     v
 }
 
-/// The firmware's instructions for a `scene` or `bench` line: its ticks
+/// The firmware's instructions for a `scene`, `spin` or `bench` line: its ticks
 /// times the board's instructions per tick.
 fn ticked(line: &str, per_tick: f64) -> Option<f64> {
     let w: Vec<&str> = line.split_whitespace().collect();
@@ -270,6 +270,9 @@ fn ticked(line: &str, per_tick: f64) -> Option<f64> {
     };
     match *w.first()? {
         "scene" => Some((num("raster_ticks")? + num("flush_ticks")?) * per_tick),
+        // A rotating-mesh frame: its vertex stage, then binning, drawing
+        // and the CRC flush.
+        "spin" => Some((num("vertex_ticks")? + num("raster_ticks")?) * per_tick),
         "bench" => Some(num("ticks")? * per_tick),
         _ => None,
     }
@@ -279,7 +282,7 @@ fn ticked(line: &str, per_tick: f64) -> Option<f64> {
 fn unit(line: &str) -> Option<(&'static str, u64)> {
     let w: Vec<&str> = line.split_whitespace().collect();
     match (w.first()?, w.get(1)?) {
-        (&"scene", _) => {
+        (&"scene" | &"spin", _) => {
             let i = w.iter().position(|&x| x == "replayed")?;
             Some(("(tile, command) pair", w[i + 1].parse().ok()?))
         }
@@ -376,6 +379,7 @@ const RUNS: [(&str, Option<&str>, &[&str]); 3] = [
         &[
             "scene teapot",
             "scene teapot_cull",
+            "spin teapot backend f32 frame 0",
             "scene demo",
             "bench gouraud_z_wid_dither8_rgb565",
             "bench large_gouraud_rgb565",

@@ -20,9 +20,14 @@
 //!    [`Material`]s per group.
 //!
 //! The [`Scene`] is then a [`CommandSource`]: the frame pipeline bins and
-//! replays its triangles by key, each built from three cache entries, so a
+//! replays its triangles by key, each read from three cache entries, so a
 //! vertex shared by triangles in several tiles is transformed and lit once
-//! per frame. Triangles that cross the near or far plane or leave the guard
+//! per frame. Binning reads each triangle's box and winding straight from
+//! the cache, and an unclipped Gouraud triangle goes from the cache to the
+//! tile without a command being built ([`CommandSource::draw_keys`]); with
+//! a tile under the plane contract
+//! ([`PlaneContract`](crate::numeric::PlaneContract)) its setup, traversal
+//! and planes are one 32-bit routine (`docs/contracts.md`). Triangles that cross the near or far plane or leave the guard
 //! band are clipped in homogeneous space ([`clip`](self) module: split into
 //! up to 7 triangles, never dropped) when they are emitted.
 //!

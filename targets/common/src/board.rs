@@ -213,7 +213,9 @@ pub const SPIN_FRAMES: u32 = 8;
 
 /// The teapot turning: 8 frames in `f32` (the FPU's back end), and the
 /// vertex stage alone in fixed point for the comparison (a second raster
-/// pipeline would be a second copy in flash).
+/// pipeline would be a second copy in flash). Built for a part without an
+/// FPU (`thumbv6m`: the MPS2 board running Cortex-M0-class code, as an
+/// RP2040 would with the teapot in its flash), the other way round.
 #[cfg(feature = "spin_teapot")]
 #[inline(never)]
 fn report_spin_teapot<const N: usize, const BC: usize, const BT: usize>(
@@ -222,12 +224,20 @@ fn report_spin_teapot<const N: usize, const BC: usize, const BT: usize>(
     clock: &mut impl Clock,
 ) -> core::fmt::Result {
     use tilerast::geometry::{Fx, Mesh, VertexSlot};
+    #[cfg(not(target_abi = "eabi"))]
+    type Frames = f32;
+    #[cfg(not(target_abi = "eabi"))]
+    type Other = Fx;
+    #[cfg(target_abi = "eabi")]
+    type Frames = Fx;
+    #[cfg(target_abi = "eabi")]
+    type Other = f32;
     let mesh = match Mesh::parse(TEAPOT_MESH) {
         Ok(m) => m,
         Err(e) => return writeln!(out, "spin teapot error {e}"),
     };
     let mut slots = [VertexSlot::EMPTY; 3648];
-    crate::report::report_spin::<f32, N, BC, BT>(
+    crate::report::report_spin::<Frames, N, BC, BT>(
         "teapot",
         &mesh,
         &mut slots,
@@ -236,7 +246,7 @@ fn report_spin_teapot<const N: usize, const BC: usize, const BT: usize>(
         out,
         clock,
     )?;
-    crate::report::report_geom::<Fx>("teapot", &mesh, &mut slots, 4, out, clock)
+    crate::report::report_geom::<Other>("teapot", &mesh, &mut slots, 4, out, clock)
 }
 
 /// The cube turning: 8 frames in fixed point (the M0's back end), and the

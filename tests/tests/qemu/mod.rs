@@ -34,11 +34,26 @@ fn cargo() -> String {
 /// `None`), with the profiler's marks when `profile` (feature `profile`),
 /// and returns the ELF path.
 pub fn build_with(board: &str, scenes: &Path, features: Option<&str>, profile: bool) -> PathBuf {
+    build_for(board, None, scenes, features, profile)
+}
+
+/// [`build_with`] for the target `triple` instead of the board's own
+/// (`None`): Cortex-M0-class code on the MPS2 board.
+pub fn build_for(
+    board: &str,
+    triple: Option<&str>,
+    scenes: &Path,
+    features: Option<&str>,
+    profile: bool,
+) -> PathBuf {
     let dir = repo().join("targets").join(board);
     let mut cmd = Process::new(cargo());
     cmd.current_dir(&dir)
         .env("TILERAST_SCENES", scenes)
         .args(["build", "--release", "--quiet"]);
+    if let Some(t) = triple {
+        cmd.args(["--target", t]);
+    }
     let mut list: Vec<&str> = vec![];
     if let Some(f) = features {
         cmd.arg("--no-default-features");
@@ -52,11 +67,11 @@ pub fn build_with(board: &str, scenes: &Path, features: Option<&str>, profile: b
     }
     let st = cmd.status().expect("cargo");
     assert!(st.success(), "building {board} firmware failed");
-    let triple = if board == "microbit" {
+    let triple = triple.unwrap_or(if board == "microbit" {
         "thumbv6m-none-eabi"
     } else {
         "thumbv7em-none-eabihf"
-    };
+    });
     // Cargo puts the board's build where `CARGO_TARGET_DIR` says, if set
     // (relative to the board's directory, where cargo ran).
     let target = std::env::var_os("CARGO_TARGET_DIR")
