@@ -32,14 +32,12 @@ use super::Tile;
 use crate::command::{Command, State, Vertex};
 use crate::config::TileConfig;
 use crate::format::{Lanes, PixelFormat, Rgb};
-use crate::fragment::dither::Dither;
-use crate::fragment::{BlendMode, DepthMode, ShadingMode, WidMode};
+use crate::fragment::BlendMode;
 use crate::geom::{pixel_span, MeshVertex};
 use crate::numeric::{div_floor_i32, Coord, Precision, SUBPIXEL_BITS, Z_FRAC};
 use crate::raster::coverage::AaMode;
 use crate::raster::span::SpanStart;
 use crate::setup::SMALL_EXTENT;
-use crate::texture::TextureMode;
 
 /// One edge as the fused path walks it: `E - bias = a k + n` along a row
 /// (`k` pixels right of the clipped box's first column), `n` growing by `s`
@@ -186,34 +184,14 @@ impl Recip {
     }
 }
 
-impl<const N: usize, C, F, Z, W, D, A, P, B, S, X> Tile<N, C>
-where
-    C: TileConfig<
-        Format = F,
-        Depth = Z,
-        Wid = W,
-        Dither = D,
-        Aa = A,
-        Precision = P,
-        Blending = B,
-        Shading = S,
-        Texturing = X,
-    >,
-    F: PixelFormat,
-    Z: DepthMode,
-    W: WidMode,
-    D: Dither,
-    A: AaMode,
-    P: Precision,
-    B: BlendMode,
-    S: ShadingMode,
-    X: TextureMode,
-{
+impl<const N: usize, C: TileConfig> Tile<N, C> {
     /// Whether an opaque Gouraud triangle with state `st` takes the plane
     /// contract's path in this configuration.
     #[inline(always)]
     pub(crate) fn plane_path(st: &State) -> bool {
-        P::PLANE && A::SAMPLES == 0 && !(B::ALPHA && st.blend.translucent())
+        <C::Precision as Precision>::PLANE
+            && <C::Aa as AaMode>::SAMPLES == 0
+            && !(<C::Blending as BlendMode>::ALPHA && st.blend.translucent())
     }
 
     /// Draws a mesh triangle from its compact vertices with state `st`,
@@ -316,16 +294,20 @@ where
         if !rc.conditioned(((bx1 - bx0) + (by1 - by0) + 2) as u32) {
             return false;
         }
-        let lanes = |k: usize| F::lanes_from_rgb8(v[k].rgb);
+        let lanes = |k: usize| C::Format::lanes_from_rgb8(v[k].rgb);
         let (l0, l1, l2) = (lanes(0), lanes(i1), lanes(i2));
         let mut cp = [Plane { c: 0, gx: 0, gy: 0 }; 4];
-        for (i, p) in cp.iter_mut().enumerate().take(F::Lanes::LEN) {
+        for (i, p) in cp
+            .iter_mut()
+            .enumerate()
+            .take(<C::Format as PixelFormat>::Lanes::LEN)
+        {
             let c0 = l0.lane(i);
             *p = rc.plane(c0, l1.lane(i) - c0, l2.lane(i) - c0);
         }
         let zl = |k: usize| (v[k].z as i32) << Z_FRAC;
         let zp = rc.plane(zl(0), zl(i1) - zl(0), zl(i2) - zl(0));
-        let dc = F::Lanes::from_fn(|i| cp[i].gx);
+        let dc = <C::Format as PixelFormat>::Lanes::from_fn(|i| cp[i].gx);
         loop {
             if lo < hi {
                 let (i, j) = (cx0 + lo - bx0, py - by0);
@@ -334,7 +316,7 @@ where
                         .wrapping_add(i.wrapping_mul(p.gx))
                 };
                 let s = SpanStart {
-                    c: F::Lanes::from_fn(|k| at(&cp[k])),
+                    c: <C::Format as PixelFormat>::Lanes::from_fn(|k| at(&cp[k])),
                     dc,
                     z: at(&zp),
                     dz: zp.gx,
