@@ -713,7 +713,7 @@ mod planes {
     /// has no branch predictor to miss: there the library's fill.
     #[inline(always)]
     fn fill_cells<T: Copy>(cells: &mut [T], v: T) {
-        if cfg!(target_arch = "arm") {
+        if crate::numeric::MCU32 {
             return cells.fill(v);
         }
         let n = cells.len();

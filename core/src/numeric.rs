@@ -240,11 +240,22 @@ fn div_floor_u24_with(n: u64, d: u32, div: impl Fn(u32) -> u32) -> u64 {
     ((q_hi as u64) << 32) | q_lo as u64
 }
 
+/// Whether this is a 32-bit microcontroller (Arm M-profile, RV32), whose
+/// arithmetic routes [`HW_DIV32`], [`LONG_MUL`] and [`HW_CLZ`] choose; a
+/// 64-bit host has every instruction they ask about.
+pub(crate) const MCU32: bool = cfg!(any(target_arch = "arm", target_arch = "riscv32"));
+
 /// Whether this chip divides 32-bit integers in hardware: every Arm
-/// M-profile core with 32-bit atomics (ARMv7-M, ARMv8-M) has `udiv`; the
-/// Cortex-M0 (ARMv6-M) has neither. Elsewhere (the host) a 64-bit
-/// division is one instruction.
-pub(crate) const HW_DIV32: bool = cfg!(all(target_arch = "arm", target_has_atomic = "32"));
+/// M-profile core with 32-bit atomics (ARMv7-M, ARMv8-M Mainline) has
+/// `udiv`, every RISC-V core with the `M` extension (rv32imc, rv32imac:
+/// ESP32-C3 and C6, the RP2350's Hazard3) has `divu`; the Cortex-M0
+/// (ARMv6-M) and rv32i have neither. Elsewhere (the host) a 64-bit division
+/// is one instruction. Both routes are bit-identical and the tests run both
+/// on the host (`docs/contracts.md`, "Routes by chip").
+pub(crate) const HW_DIV32: bool = cfg!(any(
+    all(target_arch = "arm", target_has_atomic = "32"),
+    all(target_arch = "riscv32", target_feature = "m")
+));
 
 /// `floor(n / d)` for `d > 0`: the traversal's edge walks ([`FloorWalk`],
 /// six per triangle and tile). One `sdiv` where the core has it; on the
@@ -444,7 +455,7 @@ const fn reciprocal32(d: u32) -> u32 {
 /// division (about 165 instructions).
 #[inline(always)]
 pub(crate) fn div_shl16(num: u32, den: u32) -> u32 {
-    div_shl16_by::<{ HW_DIV32 || !cfg!(target_arch = "arm") }>(num, den)
+    div_shl16_by::<{ HW_DIV32 || !MCU32 }>(num, den)
 }
 
 #[inline(always)]
@@ -460,23 +471,30 @@ fn div_shl16_by<const DIV32: bool>(num: u32, den: u32) -> u32 {
 }
 
 /// Whether the core multiplies two 32-bit integers into 64 bits in one
-/// instruction (`umull`/`smull`: ARMv7-M and up, every host); ARMv6-M (the
-/// Cortex-M0) has only the low half ([`wide_mul`]).
-pub(crate) const LONG_MUL: bool = !cfg!(target_arch = "arm") || HW_DIV32;
+/// instruction (`umull`/`smull`: ARMv7-M and up; `mulhu` beside `mul`:
+/// RISC-V with `M`; every host); ARMv6-M (the Cortex-M0) has only the low
+/// half ([`wide_mul`]), rv32i no multiply at all.
+pub(crate) const LONG_MUL: bool = !MCU32 || HW_DIV32;
 
 /// Whether the core counts leading zeros in one instruction (`clz`: every
-/// core but ARMv6-M, the Cortex-M0, whose `leading_zeros` is a library
-/// call).
-pub(crate) const HW_CLZ: bool = LONG_MUL;
+/// Arm core but ARMv6-M, whose `leading_zeros` is a library call; RISC-V
+/// only with `Zbb`, which rv32imac and the ESP32-C3 lack: there LLVM
+/// expands it into a dozen or more instructions).
+pub(crate) const HW_CLZ: bool = !MCU32
+    || cfg!(any(
+        all(target_arch = "arm", target_has_atomic = "32"),
+        target_feature = "zbb"
+    ));
 
 /// Whether the opaque span loop drops its clamps on spans whose values
 /// provably stay in range ([`steps_bounded`], [`ends_in`]): where a clamp
 /// costs instructions at every pixel — ARMv6-M, the Cortex-M0, has no
 /// `usat` and no conditional execution (six or seven instructions a lane,
-/// measured) — and in the unit tests, which run both loops on the host.
-/// Elsewhere one saturating instruction clamps a lane, less than the
-/// per-span test would cost.
-pub(crate) const CLAMP_FREE_SPANS: bool = !HW_CLZ || cfg!(test);
+/// measured), nor has RISC-V — and in the unit tests, which run both
+/// loops on the host. Elsewhere (ARMv7-M and up, a host) one saturating
+/// instruction clamps a lane, less than the per-span test would cost.
+pub(crate) const CLAMP_FREE_SPANS: bool =
+    (MCU32 && !cfg!(all(target_arch = "arm", target_has_atomic = "32"))) || cfg!(test);
 
 /// `d ^ (d >> 31)`: `|d|` for `d >= 0`, `|d| - 1` below — a bound on a
 /// step's size without a negation, OR-ed over a span's channels for
@@ -738,8 +756,7 @@ impl Divisor {
     const DIV32: bool = HW_DIV32 || cfg!(test);
     /// Whether the 32-bit reciprocal's route is compiled: the Cortex-M0
     /// (no divider), and the tests.
-    const RECIP32: bool =
-        cfg!(all(target_arch = "arm", not(target_has_atomic = "32"))) || cfg!(test);
+    const RECIP32: bool = (MCU32 && !HW_DIV32) || cfg!(test);
 
     /// For `d > 0`.
     #[inline]

@@ -1,11 +1,14 @@
-//! Bit-identical output on x86-64, Cortex-M0 and Cortex-M4: builds each QEMU
-//! firmware under `targets/`, runs it under `qemu-system-arm -icount shift=0`,
+//! Bit-identical output on x86-64 and four microcontroller instruction sets
+//! (ARMv6-M, ARMv7E-M, ARMv8-M Mainline, RV32IMAC): builds each QEMU
+//! firmware under `targets/`, runs it under QEMU with `-icount shift=0`,
 //! and asserts that the CRC32 of every scene's pixel stream equals the one
-//! the host computes with the same code. With `TILERAST_REPORT=path` it also
+//! the host computes with the same code, and that each board's clock
+//! counts a loop of known length right. With `TILERAST_REPORT=path` it also
 //! writes the cost report (instructions per pixel, flash, RAM, stack).
 //!
-//! Needs `qemu-system-arm` and the thumb targets, so it is `#[ignore]`d in a
-//! plain `cargo test`; `cargo xtask test` installs both and runs it.
+//! Needs `qemu-system-arm`, `qemu-system-riscv32` and the Rust targets, so
+//! it is `#[ignore]`d in a plain `cargo test`; `cargo xtask test` installs
+//! them and runs it.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -42,6 +45,8 @@ struct SceneLine {
 struct Report {
     board: String,
     instr_per_tick: f64,
+    /// The clock's calibration: (loop instructions, ticks it took).
+    calibration: (u64, u64),
     scenes: BTreeMap<String, SceneLine>,
     benches: BTreeMap<String, u64>,
     /// The CRC32 of the tile each workload leaves.
@@ -237,6 +242,10 @@ fn parse(out: &str) -> Report {
                     ],
                 );
             }
+            Some("calibrate") => {
+                let num = |k: &str| field(&w, k).parse::<u64>().unwrap();
+                r.calibration = (num("loop_instructions"), num("ticks"));
+            }
             Some("stack_used") => r.stack_used = w[1].parse().unwrap(),
             _ => {}
         }
@@ -293,7 +302,14 @@ fn sizes(elf: &Path) -> (u64, u64) {
             .sum()
     };
     (
-        size(&[".vector_table", ".text", ".rodata"]),
+        // (`.init.rust` and `.eh_frame`: RISC-V's `riscv-rt`.)
+        size(&[
+            ".vector_table",
+            ".text",
+            ".init.rust",
+            ".rodata",
+            ".eh_frame",
+        ]),
         size(&[".data", ".bss", ".uninit"]),
     )
 }
@@ -404,10 +420,11 @@ fn host_bench_crc<C: tilerast::config::TileConfig>(cmds: &[tilerast::command::Co
 fn firmware_output_is_bit_identical_to_the_host() {
     let scenes = export_scenes();
     let mut reports = vec![];
-    for board in ["mps2-an386", "microbit"] {
+    for board in BOARDS {
         let elf = build(board, &scenes, None);
         let out = run(board, &elf);
         let mut r = parse(&out);
+        check_clock(board, &r);
         // The teapots' flash images fit only the MPS2's 4 MB.
         let expect = if board == "microbit" { 2 } else { 4 };
         assert_eq!(r.scenes.len(), expect, "{out}");
@@ -526,9 +543,10 @@ fn firmware_output_is_bit_identical_to_the_host() {
         // The rotating mesh, frame by frame; the other back end's vertex
         // stage, hashed.
         check_spins(board, &r, &scenes, r.scenes["demo"].tile, &out);
-        // The volume (the MPS2 only: 128 KB of volume in RAM), both modes
-        // bit for bit; a build without it carries none of the volume stage.
-        if board == "mps2-an386" {
+        // The volume (not on the micro:bit: 128 KB of volume in RAM), both
+        // modes bit for bit; a build without it carries none of the volume
+        // stage.
+        if board != "microbit" {
             let host = host_volume();
             for (mode, h) in ["normal_blending", "per_slice"].iter().zip(host) {
                 let v = r
@@ -548,9 +566,9 @@ fn firmware_output_is_bit_identical_to_the_host() {
                 "{board}: a build without the volume feature carries volume code"
             );
         }
-        // The culled city (the MPS2 only), every mode bit for bit as the
-        // host's, and every mode's frames equal to the unculled ones.
-        if board == "mps2-an386" {
+        // The culled city (not on the micro:bit), every mode bit for bit as
+        // the host's, and every mode's frames equal to the unculled ones.
+        if board != "microbit" {
             let mut slots =
                 vec![tilerast::geometry::VertexSlot::EMPTY; tilerast_fw::city::FW_SLOTS];
             for mode in tilerast::occlusion::CullMode::ALL {
@@ -624,6 +642,30 @@ fn firmware_output_is_bit_identical_to_the_host() {
     }
 }
 
+/// The QEMU boards, one per instruction set, in the report's column order:
+/// ARMv7E-M, ARMv8-M Mainline, RV32IMAC, ARMv6-M.
+const BOARDS: [&str; 4] = ["mps2-an386", "mps2-an505", "riscv-virt", "microbit"];
+
+/// Asserts the board's clock counted its calibration loop (`2 n`
+/// instructions, `n` iterations of two) as its stated instructions per
+/// tick say: to a tick, beside the few instructions around the loop.
+fn check_clock(board: &str, r: &Report) {
+    let (n, ticks) = r.calibration;
+    assert!(n > 0, "{board}: no calibrate line");
+    let counted = ticks as f64 * r.instr_per_tick;
+    let slack = r.instr_per_tick + 32.0;
+    assert!(
+        (counted - n as f64).abs() <= slack,
+        "{board}: a loop of {n} instructions took {ticks} ticks = {counted} instructions \
+         at {} a tick",
+        r.instr_per_tick
+    );
+    println!(
+        "{board:>10} clock: {n}-instruction loop = {ticks} ticks x {} = {counted}",
+        r.instr_per_tick
+    );
+}
+
 /// Asserts a board's rotating-mesh frames and vertex stages equal the
 /// host's, frame by frame.
 fn check_spins(board: &str, r: &Report, scenes: &Path, spin_tile: (u16, u16), out: &str) {
@@ -690,11 +732,16 @@ fn report(reports: &[BoardResult], v6: &Report) -> String {
     let fill_px = workloads::covered_pixels(&FILL_CMDS, workloads::SIDE).unwrap();
     let eg_px = workloads::eg_covered_pixels(&TRIANGLE_CMDS);
     let large_px = workloads::covered_pixels(&LARGE_TRIANGLE_CMDS, workloads::SIDE).unwrap();
-    let mut md = String::from("# Instructions per pixel on emulated Cortex-M\n\n");
+    let mut md = String::from("# Instructions per pixel on emulated Cortex-M and RISC-V\n\n");
     md += "Generated by `cargo xtask report` (the firmware test with `TILERAST_REPORT`). \
-           QEMU runs each firmware with `-icount shift=0`; SysTick counts the core clock, \
-           so one tick is a fixed number of instructions (40 on `mps2-an386`, 62.5 on `microbit`). \
-           Whole workloads and whole frames are timed, never single pixels; per-pixel figures \
+           QEMU runs each firmware with `-icount shift=0` (one instruction per virtual \
+           nanosecond). On Arm, SysTick counts the core clock, so one tick is a fixed number \
+           of instructions: 40 on `mps2-an386` (Cortex-M4F, ARMv7E-M, 25 MHz), 50 on \
+           `mps2-an505` (Cortex-M33, ARMv8-M Mainline, 20 MHz), 62.5 on `microbit` \
+           (Cortex-M0, ARMv6-M, 16 MHz). On `riscv-virt` (RV32IMAC) `minstret` counts retired \
+           instructions: one a tick. Each run first times a loop of known length (2 M \
+           instructions) with the same clock, and the test asserts it counts right to a tick \
+           (the clock table below). Whole workloads and whole frames are timed, never single pixels; per-pixel figures \
            divide by the pixels the workload rasterizes (counted on the host: covered pixels \
            summed over commands, overdraw included). Two runs give identical counts (asserted).\n\n";
     md += &format!(
@@ -707,7 +754,22 @@ fn report(reports: &[BoardResult], v6: &Report) -> String {
         l = workloads::LARGE_TRIANGLES
     );
     let boards: Vec<&Report> = reports.iter().map(|r| &r.report).collect();
-    md += "| workload | ";
+    md += "| board | clock | instructions a tick | a loop of 2 M instructions, counted |\n\
+           | --- | --- | ---: | ---: |\n";
+    for b in &boards {
+        let clock = if b.board.starts_with("riscv") {
+            "`minstret`"
+        } else {
+            "SysTick"
+        };
+        md += &format!(
+            "| {} | {clock} | {} | {:.0} |\n",
+            b.board,
+            b.instr_per_tick,
+            b.calibration.1 as f64 * b.instr_per_tick
+        );
+    }
+    md += "\n| workload | ";
     md += &boards
         .iter()
         .map(|b| format!("{} instr/px", b.board))
@@ -1045,7 +1107,7 @@ fn report(reports: &[BoardResult], v6: &Report) -> String {
     }
     md += "\n## Flash and RAM\n\nFlash is `.vector_table` + `.text` + `.rodata` (the scenes are in `.rodata`); \
            static RAM is `.data` + `.bss`; the stack high-water mark is measured by the firmware \
-           (`cortex-m-rt`'s `paint-stack`). *Full*: both scenes and the workloads (on the micro:bit \
+           (`cortex-m-rt`'s `paint-stack` on Arm; the RISC-V port paints its own). *Full*: both scenes and the workloads (on the micro:bit \
            both scenes: its workloads and the rotating cube are builds of their own); *SSD1306 only*: \
            the features one 1-bit scene needs.\n\n| board | build | flash bytes | static RAM bytes | stack peak bytes |\n| --- | --- | ---: | ---: | ---: |\n";
     for r in reports {

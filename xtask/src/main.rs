@@ -1,19 +1,21 @@
 //! Project tasks, run with `cargo xtask <task>`:
 //!
 //! - `test`: everything CI checks, installing what a fresh machine lacks —
-//!   the Cortex-M Rust targets (and `rustfmt`/`clippy`) via `rustup`. Runs
+//!   the Rust targets (and `rustfmt`/`clippy`) via `rustup`, QEMU's Arm and
+//!   RISC-V emulators (`qemu-system-arm`, `qemu-system-misc`) via apt. Runs
 //!   formatting and lint checks, every workspace test (unit, integration,
-//!   property, doc), and the `no_std` core builds for `thumbv6m-none-eabi`
-//!   (Cortex-M0) and `thumbv7em-none-eabihf` (Cortex-M4F), with and without
-//!   its optional features; installs `qemu-system-arm` (apt) when missing,
-//!   builds the real-board example, and builds and runs both QEMU firmwares,
-//!   checking that their output is bit-identical to the host's.
+//!   property, doc), the `no_std` core builds for ARMv6-M, ARMv7E-M,
+//!   ARMv8-M Mainline and RV32IMAC, with and without its optional features
+//!   (and plain builds for rv32imc and rv32i), builds the real-board
+//!   examples, and builds and runs the four QEMU firmwares, checking that
+//!   their output is bit-identical to the host's.
 //! - `demo`: renders `scenes/demo.toml` to `demo.png`.
 //! - `bench`: runs the criterion benchmark, writes `reports/bench.md`, then
 //!   the simulator's quality reports (`aa`, `ruf`, `phong`, `texture`) and the speed-against-
 //!   accuracy sweep (`reports/tradeoff.*`).
 //! - `report`: runs the firmware under QEMU, writes `reports/targets.md`
-//!   (instructions per pixel on Cortex-M0/M4, flash, RAM, stack, the
+//!   (instructions per pixel on ARMv6-M, ARMv7E-M, ARMv8-M and RV32IMAC,
+//!   flash, RAM, stack, the
 //!   volume workload), then the host frame timings (`reports/frames.md`)
 //!   and the volume-rendering report (`reports/volume.md`).
 //! - `fuzz [--seconds N] [TARGET...]`: runs every cargo-fuzz target of
@@ -26,7 +28,20 @@
 
 use std::process::{Command, ExitCode};
 
-const THUMB_TARGETS: [&str; 2] = ["thumbv6m-none-eabi", "thumbv7em-none-eabihf"];
+/// The microcontroller targets the core is built and linted for, with and
+/// without its features, and the QEMU boards run: ARMv6-M (Cortex-M0),
+/// ARMv7E-M (Cortex-M4F), ARMv8-M Mainline (Cortex-M33), RV32IMAC.
+const TARGETS: [&str; 4] = [
+    "thumbv6m-none-eabi",
+    "thumbv7em-none-eabihf",
+    "thumbv8m.main-none-eabihf",
+    "riscv32imac-unknown-none-elf",
+];
+
+/// RISC-V targets the core is built for too (its arithmetic routes chosen
+/// by `cfg`): rv32imc (ESP32-C3, no atomics) and rv32i (no multiply, no
+/// divide: the Cortex-M0's routes).
+const CORE_ONLY_TARGETS: [&str; 2] = ["riscv32imc-unknown-none-elf", "riscv32i-unknown-none-elf"];
 
 fn run(program: &str, args: &[&str]) -> Result<(), String> {
     run_in(".", program, args)
@@ -117,7 +132,7 @@ fn output(program: &str, args: &[&str]) -> String {
 /// Installs the thumb targets and the rustfmt/clippy components when missing.
 fn ensure_toolchain() -> Result<(), String> {
     let installed = output("rustup", &["target", "list", "--installed"]);
-    for t in THUMB_TARGETS {
+    for t in TARGETS.iter().chain(&CORE_ONLY_TARGETS) {
         if !installed.lines().any(|l| l.trim() == t) {
             run("rustup", &["target", "add", t])?;
         }
@@ -131,13 +146,24 @@ fn ensure_toolchain() -> Result<(), String> {
     Ok(())
 }
 
-/// Installs `qemu-system-arm` (Debian package) when it is missing.
+/// Installs QEMU's Arm and RISC-V system emulators (Debian packages
+/// `qemu-system-arm`, `qemu-system-misc`) when missing.
 fn ensure_qemu() -> Result<(), String> {
-    let found = Command::new("qemu-system-arm")
-        .arg("--version")
-        .output()
-        .map(|o| o.status.success());
-    if found.unwrap_or(false) {
+    let found = |program: &str| {
+        Command::new(program)
+            .arg("--version")
+            .output()
+            .is_ok_and(|o| o.status.success())
+    };
+    let missing: Vec<&str> = [
+        ("qemu-system-arm", "qemu-system-arm"),
+        ("qemu-system-riscv32", "qemu-system-misc"),
+    ]
+    .into_iter()
+    .filter(|(program, _)| !found(program))
+    .map(|(_, package)| package)
+    .collect();
+    if missing.is_empty() {
         return Ok(());
     }
     let sudo = if output("id", &["-u"]).trim() == "0" {
@@ -153,12 +179,16 @@ fn ensure_qemu() -> Result<(), String> {
         run(all[0], &all[1..])
     };
     apt(&["update", "-qq"])?;
-    apt(&["install", "-y", "-qq", "qemu-system-arm"])
+    let mut install = vec!["install", "-y", "-qq"];
+    install.extend(missing);
+    apt(&install)
 }
 
 /// The firmware crates, each its own workspace, built like a user would.
-const BOARDS: [&str; 4] = [
+const BOARDS: [&str; 6] = [
     "mps2-an386",
+    "mps2-an505",
+    "riscv-virt",
     "microbit",
     "rp-pico-st7789",
     "rp-pico-ssd1306",
@@ -194,7 +224,13 @@ fn test() -> Result<(), String> {
         "cargo",
         &["package", "-p", "tilerast", "--allow-dirty", "--quiet"],
     )?;
-    for t in THUMB_TARGETS {
+    for t in CORE_ONLY_TARGETS {
+        run(
+            "cargo",
+            &["build", "-p", "tilerast", "--release", "--target", t],
+        )?;
+    }
+    for t in TARGETS {
         run(
             "cargo",
             &["build", "-p", "tilerast", "--release", "--target", t],
@@ -254,7 +290,7 @@ fn test() -> Result<(), String> {
     let scenes = std::fs::canonicalize("target/tmp/scenes")
         .map_err(|e| format!("target/tmp/scenes: {e}"))?;
     let scenes = scenes.to_string_lossy();
-    for b in ["mps2-an386", "microbit"] {
+    for b in ["mps2-an386", "mps2-an505", "riscv-virt", "microbit"] {
         run_with(
             &format!("targets/{b}"),
             &[("TILERAST_SCENES", &scenes)],

@@ -40,7 +40,7 @@ impl<T: EdgeInt> FloorWalk<T> {
     pub(crate) fn next(&mut self) {
         self.q += self.sq;
         self.r += self.sr;
-        if cfg!(target_arch = "arm") {
+        if crate::numeric::MCU32 {
             if self.r >= self.den {
                 self.r = self.r - self.den;
                 self.q += T::ONE;

@@ -24,8 +24,9 @@
 //!   use.
 //! - [`report`]: the lines a firmware prints (scene CRCs, workload ticks),
 //!   computable on the host too.
-//! - `board` (feature): the Cortex-M runtime side — SysTick clock,
-//!   semihosting output, stack high-water mark.
+//! - `panel` (feature): what the ST7789 board examples share.
+//! - `board` (feature, with a port: `cortex-m` or `riscv`): the runtime
+//!   side — instruction clock, report output, stack high-water mark.
 #![no_std]
 #![deny(missing_docs)]
 #![cfg_attr(not(feature = "board"), forbid(unsafe_code))]
@@ -34,6 +35,8 @@ pub mod anim;
 #[cfg(feature = "board")]
 pub mod board;
 pub mod city;
+#[cfg(feature = "panel")]
+pub mod panel;
 pub mod report;
 pub mod rng;
 pub mod spin;

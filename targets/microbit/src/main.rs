@@ -10,7 +10,7 @@
 #![no_main]
 
 use panic_semihosting as _;
-use tilerast_fw::board::{run, Board};
+use tilerast_fw::board::{cortex_m::CortexM, run, Board};
 
 const DEMO_TILE: (u16, u16) = (32, 32);
 const SSD_TILE: (u16, u16) = (128, 16);
@@ -26,5 +26,7 @@ fn main() -> ! {
         cpu: "cortex-m0",
         instr_per_tick: "62.5",
     };
-    run::<{ 32 * 32 / 8 }, { 128 * 16 / 8 }, BIN_ENTRIES, 64>(&board, DEMO_TILE, SSD_TILE)
+    run::<_, { 32 * 32 / 8 }, { 128 * 16 / 8 }, BIN_ENTRIES, 64>(
+        &board, CortexM, DEMO_TILE, SSD_TILE,
+    )
 }

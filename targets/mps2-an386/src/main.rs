@@ -8,7 +8,7 @@
 #![no_main]
 
 use panic_semihosting as _;
-use tilerast_fw::board::{run, Board};
+use tilerast_fw::board::{cortex_m::CortexM, run, Board};
 
 /// The demo in its exported 64x32 tiles, the SSD1306 scene in 128x16.
 const DEMO_TILE: (u16, u16) = (64, 32);
@@ -24,5 +24,7 @@ fn main() -> ! {
         cpu: "cortex-m4f",
         instr_per_tick: "40",
     };
-    run::<{ 64 * 32 / 8 }, { 128 * 16 / 8 }, BIN_ENTRIES, 32>(&board, DEMO_TILE, SSD_TILE)
+    run::<_, { 64 * 32 / 8 }, { 128 * 16 / 8 }, BIN_ENTRIES, 32>(
+        &board, CortexM, DEMO_TILE, SSD_TILE,
+    )
 }

@@ -67,11 +67,8 @@ pub fn build_for(
     }
     let st = cmd.status().expect("cargo");
     assert!(st.success(), "building {board} firmware failed");
-    let triple = triple.unwrap_or(if board == "microbit" {
-        "thumbv6m-none-eabi"
-    } else {
-        "thumbv7em-none-eabihf"
-    });
+    let own = config_value(board, "target = ");
+    let triple = triple.unwrap_or(&own);
     // Cargo puts the board's build where `CARGO_TARGET_DIR` says, if set
     // (relative to the board's directory, where cargo ran).
     let target = std::env::var_os("CARGO_TARGET_DIR")
@@ -83,22 +80,27 @@ pub fn build_for(
         .join(format!("tilerast-{board}"))
 }
 
+/// The first value of `key` (say `target = `) in a board's
+/// `.cargo/config.toml`, unquoted: its target triple, its runner.
+fn config_value(board: &str, key: &str) -> String {
+    let path = repo()
+        .join("targets")
+        .join(board)
+        .join(".cargo/config.toml");
+    let config = std::fs::read_to_string(&path).unwrap();
+    config
+        .lines()
+        .find_map(|l| l.strip_prefix(key))
+        .unwrap_or_else(|| panic!("no `{key}` in {}", path.display()))
+        .trim_matches('"')
+        .to_string()
+}
+
 /// Runs a firmware ELF under QEMU with the runner its `.cargo/config.toml`
 /// names, with more QEMU arguments (a `-plugin`, say) before `-kernel`;
 /// returns what it printed.
 pub fn run_with(board: &str, elf: &Path, extra: &[&str]) -> String {
-    let config = std::fs::read_to_string(
-        repo()
-            .join("targets")
-            .join(board)
-            .join(".cargo/config.toml"),
-    )
-    .unwrap();
-    let runner = config
-        .lines()
-        .find_map(|l| l.strip_prefix("runner = "))
-        .expect("runner")
-        .trim_matches('"');
+    let runner = config_value(board, "runner = ");
     let mut words: Vec<&str> = runner.split_whitespace().collect();
     assert_eq!(words.pop(), Some("-kernel"), "{runner}");
     let out = Process::new(words[0])
@@ -107,7 +109,7 @@ pub fn run_with(board: &str, elf: &Path, extra: &[&str]) -> String {
         .arg("-kernel")
         .arg(elf)
         .output()
-        .expect("qemu-system-arm (installed by `cargo xtask test`)");
+        .unwrap_or_else(|e| panic!("{} (installed by `cargo xtask test`): {e}", words[0]));
     let text = String::from_utf8_lossy(&out.stdout).into_owned();
     assert!(
         out.status.success(),

@@ -1,16 +1,31 @@
-//! The board runtime (feature `board`): what every firmware's `main` calls.
+//! The board runtime (feature `board`): what every firmware's `main` calls,
+//! over a [`Port`] — the few things that differ between instruction sets:
+//! an instruction clock, a line of output, a stack to measure, a way out.
 //!
-//! Instructions are counted as the project's design notes prescribe: QEMU runs
-//! with `-icount shift=0` (one instruction per virtual nanosecond) and
-//! SysTick counts the core clock, so one tick is a fixed number of
-//! instructions per board (40 on `mps2-an386`, 62.5 on `microbit`). Each
-//! measured section is shorter than SysTick's 2^24-tick period and laps are
-//! summed, so counts are exact to a tick and repeat run after run.
+//! - [`cortex_m`] (feature `cortex-m`): SysTick, semihosting, `cortex-m-rt`'s
+//!   painted stack. ARMv6-M, ARMv7E-M and ARMv8-M Mainline boards.
+//! - [`riscv`] (feature `riscv`): `minstret`, the 16550 UART, the test
+//!   device's exit. RV32 boards (QEMU `virt`).
+//!
+//! Instructions are counted as the project's design notes prescribe: QEMU
+//! runs with `-icount shift=0` (one instruction per virtual nanosecond). On
+//! Arm, SysTick counts the core clock, so one tick is a fixed number of
+//! instructions per board (40 on `mps2-an386` at 25 MHz, 50 on `mps2-an505`
+//! at 20 MHz, 62.5 on `microbit` at 16 MHz); each measured section is
+//! shorter than SysTick's 2^24-tick period and laps are summed. On RISC-V,
+//! `minstret` counts retired instructions: one tick is one instruction.
+//! Every run starts with a `calibrate` line, a loop of known length timed
+//! by the same clock, which the firmware test checks against the stated
+//! instructions per tick; counts are exact to a tick and repeat run after
+//! run.
 
 use crate::Clock;
 use core::fmt::Write;
-use cortex_m::peripheral::{syst::SystClkSource, SYST};
-use cortex_m_semihosting::{debug, hio};
+
+#[cfg(feature = "cortex-m")]
+pub mod cortex_m;
+#[cfg(feature = "riscv")]
+pub mod riscv;
 
 /// What a board tells the report.
 pub struct Board {
@@ -18,85 +33,56 @@ pub struct Board {
     pub name: &'static str,
     /// CPU core.
     pub cpu: &'static str,
-    /// Instructions per SysTick tick under `-icount shift=0`.
+    /// Instructions per clock tick under `-icount shift=0`.
     pub instr_per_tick: &'static str,
 }
 
-/// SysTick, counting down from 2^24 - 1 at the core clock.
-struct SysTickClock {
-    last: u32,
+/// What differs between instruction sets: implemented by [`cortex_m::CortexM`]
+/// and [`riscv::Virt`].
+pub trait Port {
+    /// Where the report goes.
+    type Out: Write;
+    /// The instruction clock.
+    type Clock: Clock;
+    /// Opens the output and starts the clock; `None` if either cannot be.
+    fn start(self) -> Option<(Self::Out, Self::Clock)>;
+    /// The stack's lowest address and the address past its top, filled with
+    /// `0xCCCCCCCC` before `main` (or by [`Port::start`]).
+    fn stack() -> (usize, usize);
+    /// Runs `n` iterations (`n > 0`) of a two-instruction loop: exactly
+    /// `2 n` instructions, for the clock's calibration.
+    fn spin_loop(n: u32);
+    /// Ends the run: QEMU exits with status 0 when `ok`, else 1.
+    fn exit(ok: bool) -> !;
 }
 
-impl Clock for SysTickClock {
-    fn lap(&mut self) -> u32 {
-        #[cfg(feature = "profile")]
-        tilerast_lap();
-        let now = SYST::get_current();
-        let d = self.last.wrapping_sub(now) & 0x00FF_FFFF;
-        self.last = now;
-        d
+/// Bytes of stack ever used: the stack was filled with `0xCCCCCCCC` at
+/// reset; the lowest scrubbed word marks the peak.
+fn stack_used<P: Port>() -> usize {
+    let (lo, hi) = P::stack();
+    let mut p = lo;
+    // SAFETY: `P::stack` delimits RAM owned by the stack; reading it word
+    // by word (volatile, aligned) has no side effect.
+    while p < hi && unsafe { core::ptr::read_volatile(p as *const u32) } == 0xCCCC_CCCC {
+        p += 4;
     }
+    hi - p
 }
 
-/// The report's writer: after each line it calls [`tilerast_report_line`],
-/// the mark `qemu-prof` splits its instruction profile at, so each line's
-/// work (what was measured, and printing the line before) is one segment
-/// (`tests/qemu-prof/segprof.c`, `reports/profile.md`). One call a line,
-/// outside every timed section. Feature `profile` only.
-#[cfg(feature = "profile")]
-struct Lines<W>(W);
+/// Iterations of the calibration loop: 2 M instructions.
+const CALIBRATION: u32 = 1_000_000;
 
-#[cfg(feature = "profile")]
-impl<W: Write> Write for Lines<W> {
-    fn write_str(&mut self, s: &str) -> core::fmt::Result {
-        self.0.write_str(s)?;
-        for _ in s.bytes().filter(|&b| b == b'\n') {
-            tilerast_report_line();
-        }
-        Ok(())
-    }
-}
-
-/// Does nothing, out of line under a name the profiler finds in the ELF:
-/// executing it marks the end of a report line.
-#[cfg(feature = "profile")]
-#[no_mangle]
-#[inline(never)]
-pub extern "C" fn tilerast_report_line() {
-    // Not removable: a call to an empty function could be dropped.
-    cortex_m::asm::nop();
-}
-
-/// The same for each reading of SysTick ([`Clock::lap`]): the profiler
-/// splits there too, so it can tell the timed instructions (between a
-/// line's first and last lap) from the rest. Four instructions a lap; two
-/// `nop`s, so that the linker cannot fold it into the line's mark.
-#[cfg(feature = "profile")]
-#[no_mangle]
-#[inline(never)]
-pub extern "C" fn tilerast_lap() {
-    cortex_m::asm::nop();
-    cortex_m::asm::nop();
-}
-
-/// Bytes of stack ever used: `cortex-m-rt`'s `paint-stack` fills the stack
-/// with `0xCCCCCCCC` at reset; the lowest scrubbed word marks the peak.
-fn stack_used() -> usize {
-    extern "C" {
-        static _stack_end: u32;
-        static _stack_start: u32;
-    }
-    // SAFETY: the linker symbols delimit RAM owned by the stack; reading it
-    // word by word (volatile, aligned) has no side effect.
-    unsafe {
-        let lo = core::ptr::addr_of!(_stack_end) as usize;
-        let hi = core::ptr::addr_of!(_stack_start) as usize;
-        let mut p = lo;
-        while p < hi && core::ptr::read_volatile(p as *const u32) == 0xCCCC_CCCC {
-            p += 4;
-        }
-        hi - p
-    }
+/// Prints `calibrate loop_instructions N ticks T`: a loop of exactly `N`
+/// instructions timed by the clock the report uses.
+fn calibrate<P: Port>(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt::Result {
+    clock.lap();
+    P::spin_loop(CALIBRATION);
+    let t = clock.lap();
+    writeln!(
+        out,
+        "calibrate loop_instructions {} ticks {t}",
+        2 * CALIBRATION
+    )
 }
 
 #[cfg(feature = "demo")]
@@ -110,43 +96,30 @@ static TEAPOT_MESH: &[u8] = include_bytes!(concat!(env!("TILERAST_SCENES"), "/te
 #[cfg(feature = "ssd1306")]
 static SSD1306: &[u8] = include_bytes!(concat!(env!("TILERAST_SCENES"), "/ssd1306.bin"));
 
-/// Runs the report and exits QEMU. `ND`/`NS` are the tile capacities (in
-/// groups of 8 pixels) for the demo and SSD1306 scenes, rendered in tiles of
-/// `demo_tile` and `ssd_tile` (the teapot in the demo's); `BC`/`BT` the bins'
-/// entries and tiles per pass.
-pub fn run<const ND: usize, const NS: usize, const BC: usize, const BT: usize>(
+/// Runs the report on `port` and exits QEMU. `ND`/`NS` are the tile
+/// capacities (in groups of 8 pixels) for the demo and SSD1306 scenes,
+/// rendered in tiles of `demo_tile` and `ssd_tile` (the teapot in the
+/// demo's); `BC`/`BT` the bins' entries and tiles per pass.
+pub fn run<P: Port, const ND: usize, const NS: usize, const BC: usize, const BT: usize>(
     b: &Board,
+    port: P,
     demo_tile: (u16, u16),
     ssd_tile: (u16, u16),
 ) -> ! {
     let _ = (demo_tile, ssd_tile);
-    let out = match hio::hstdout() {
-        Ok(o) => o,
-        Err(()) => {
-            debug::exit(debug::EXIT_FAILURE);
-            loop {}
-        }
+    let Some((out, mut clock)) = port.start() else {
+        P::exit(false)
     };
     #[cfg(feature = "profile")]
-    let out = Lines(out);
+    let out = cortex_m::Lines(out);
     let mut out = out;
-    let Some(mut cp) = cortex_m::Peripherals::take() else {
-        debug::exit(debug::EXIT_FAILURE);
-        loop {}
-    };
-    cp.SYST.set_clock_source(SystClkSource::Core);
-    cp.SYST.set_reload(0x00FF_FFFF);
-    cp.SYST.clear_current();
-    cp.SYST.enable_counter();
-    let mut clock = SysTickClock {
-        last: SYST::get_current(),
-    };
     let mut body = || -> core::fmt::Result {
         writeln!(
             out,
             "board {} cpu {} instr_per_tick {}",
             b.name, b.cpu, b.instr_per_tick
         )?;
+        calibrate::<P>(&mut out, &mut clock)?;
         #[cfg(feature = "demo")]
         crate::report::report_scene::<crate::report::Demo, ND, BC, BT>(
             DEMO, demo_tile, &mut out, &mut clock,
@@ -195,27 +168,49 @@ pub fn run<const ND: usize, const NS: usize, const BC: usize, const BT: usize>(
         report_spin_teapot::<ND, BC, BT>(demo_tile, &mut out, &mut clock)?;
         #[cfg(feature = "spin_cube")]
         report_spin_cube::<ND, BT>(demo_tile, &mut out, &mut clock)?;
-        writeln!(out, "stack_used {}", stack_used())?;
+        writeln!(out, "stack_used {}", stack_used::<P>())?;
         writeln!(out, "done")
     };
     let ok = body().is_ok();
-    debug::exit(if ok {
-        debug::EXIT_SUCCESS
-    } else {
-        debug::EXIT_FAILURE
-    });
-    loop {}
+    P::exit(ok)
 }
 
 /// Frames of each rotating-mesh run.
 #[cfg(any(feature = "spin_teapot", feature = "spin_cube"))]
 pub const SPIN_FRAMES: u32 = 8;
 
+/// The teapot's frames in `f32` where the chip has an FPU.
+#[cfg(all(
+    feature = "spin_teapot",
+    not(any(
+        target_abi = "eabi",
+        all(target_arch = "riscv32", not(target_feature = "f"))
+    ))
+))]
+mod backend {
+    pub(super) type Frames = f32;
+    pub(super) type Other = tilerast::geometry::Fx;
+}
+
+/// In fixed point where it has none (ARMv6-M's `eabi`, RISC-V without `f`).
+#[cfg(all(
+    feature = "spin_teapot",
+    any(
+        target_abi = "eabi",
+        all(target_arch = "riscv32", not(target_feature = "f"))
+    )
+))]
+mod backend {
+    pub(super) type Frames = tilerast::geometry::Fx;
+    pub(super) type Other = f32;
+}
+
 /// The teapot turning: 8 frames in `f32` (the FPU's back end), and the
 /// vertex stage alone in fixed point for the comparison (a second raster
 /// pipeline would be a second copy in flash). Built for a part without an
 /// FPU (`thumbv6m`: the MPS2 board running Cortex-M0-class code, as an
-/// RP2040 would with the teapot in its flash), the other way round.
+/// RP2040 would with the teapot in its flash; `riscv32imac`, as an
+/// ESP32-C3 or C6), the other way round.
 #[cfg(feature = "spin_teapot")]
 #[inline(never)]
 fn report_spin_teapot<const N: usize, const BC: usize, const BT: usize>(
@@ -223,15 +218,8 @@ fn report_spin_teapot<const N: usize, const BC: usize, const BT: usize>(
     out: &mut impl Write,
     clock: &mut impl Clock,
 ) -> core::fmt::Result {
-    use tilerast::geometry::{Fx, Mesh, VertexSlot};
-    #[cfg(not(target_abi = "eabi"))]
-    type Frames = f32;
-    #[cfg(not(target_abi = "eabi"))]
-    type Other = Fx;
-    #[cfg(target_abi = "eabi")]
-    type Frames = Fx;
-    #[cfg(target_abi = "eabi")]
-    type Other = f32;
+    use backend::{Frames, Other};
+    use tilerast::geometry::{Mesh, VertexSlot};
     let mesh = match Mesh::parse(TEAPOT_MESH) {
         Ok(m) => m,
         Err(e) => return writeln!(out, "spin teapot error {e}"),

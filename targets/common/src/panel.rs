@@ -1,0 +1,95 @@
+//! What the ST7789 board examples share (feature `panel`): the panel's
+//! window commands over any `embedded-hal` SPI bus, the bus-and-chip-select
+//! `SpiDevice` a panel driver initialises through (given back afterwards
+//! for DMA), and the turning cube's camera and motion, in either geometry
+//! back end (`Fx` on a Cortex-M0+, `f32` where there is an FPU).
+//!
+//! A board example is then its HAL's set-up, its DMA ping-pong and its
+//! log: `targets/rp-pico-st7789` (RP2040), `targets/rp-pico2-st7789`
+//! (RP2350), `targets/esp32c3-st7789` (ESP32-C3).
+
+use embedded_hal::digital::OutputPin;
+use embedded_hal::spi::{ErrorType, Operation, SpiBus, SpiDevice};
+use tilerast::geometry::{Angle, DrawOptions, Lighting, Mat4, Mesh, Real, Scene};
+use tilerast::prelude::{Error, Rect};
+
+/// Sends an ST7789 command byte (DC low) and its parameters (DC high),
+/// blocking: a few bytes before each tile's transfer. The first bus error
+/// is returned; DC errors are the pin's, which on these chips cannot fail.
+pub fn command<B: SpiBus, D: OutputPin>(
+    bus: &mut B,
+    dc: &mut D,
+    cmd: u8,
+    data: &[u8],
+) -> Result<(), B::Error> {
+    let _ = dc.set_low();
+    bus.write(&[cmd])?;
+    bus.flush()?;
+    let _ = dc.set_high();
+    bus.write(data)?;
+    bus.flush()
+}
+
+/// Opens the panel window of `a` for a RAM write (CASET, RASET, RAMWR): the
+/// tile's pixels follow as data.
+pub fn window<B: SpiBus, D: OutputPin>(bus: &mut B, dc: &mut D, a: Rect) -> Result<(), B::Error> {
+    let be = |lo: i32, len: u32| {
+        let (s, e) = (lo as u16, (lo + len as i32 - 1) as u16);
+        [(s >> 8) as u8, s as u8, (e >> 8) as u8, e as u8]
+    };
+    command(bus, dc, 0x2A, &be(a.x, a.w))?;
+    command(bus, dc, 0x2B, &be(a.y, a.h))?;
+    command(bus, dc, 0x2C, &[])
+}
+
+/// An SPI bus and its chip select as the `SpiDevice` a panel driver
+/// (`mipidsi`) initialises the panel through; afterwards the example takes
+/// the bus back for DMA (`embedded-hal-bus`'s `ExclusiveDevice` keeps it).
+pub struct Device<B, C> {
+    /// The bus.
+    pub bus: B,
+    /// Chip select, low while a transaction runs.
+    pub cs: C,
+}
+
+impl<B: ErrorType, C> ErrorType for Device<B, C> {
+    type Error = B::Error;
+}
+
+impl<B: SpiBus, C: OutputPin> SpiDevice for Device<B, C> {
+    fn transaction(&mut self, ops: &mut [Operation<'_, u8>]) -> Result<(), B::Error> {
+        let _ = self.cs.set_low();
+        let r = ops.iter_mut().try_for_each(|op| match op {
+            Operation::Read(b) => self.bus.read(b),
+            Operation::Write(b) => self.bus.write(b),
+            Operation::Transfer(r, w) => self.bus.transfer(r, w),
+            Operation::TransferInPlace(b) => self.bus.transfer_in_place(b),
+            Operation::DelayNs(_) => Ok(()),
+        });
+        let f = self.bus.flush();
+        let _ = self.cs.set_high();
+        r.and(f)
+    }
+}
+
+/// The camera 3 units away, 40° field of view, a 240x240 viewport, and one
+/// white light from the upper left: set once.
+pub fn camera<S: Real>(scene: &mut Scene<'_, S>) -> Result<(), Error> {
+    let q = |v: i32| S::from_q(v as i64, 8); // 1/256 units
+    scene.set_camera(
+        Mat4::look_at([q(0), q(0), q(3 * 256)], [q(0); 3], [q(0), q(256), q(0)])?,
+        Mat4::perspective(Angle::degrees(40), S::ONE, q(256), q(5 * 256))?,
+    );
+    scene.set_viewport(Rect::new(0, 0, 240, 240))?;
+    scene.set_lighting(Lighting::white([q(-102), q(154), q(256)], q(51))?);
+    Ok(())
+}
+
+/// This frame's draw: `mesh` turned by `t` about y and half that about x.
+pub fn turn<'a, S: Real>(scene: &mut Scene<'a, S>, mesh: &Mesh<'a>, t: Angle) -> Result<(), Error> {
+    scene.clear();
+    let half = Angle::from_turn_q16(t.turn_q16() / 2);
+    let model = Mat4::rotation_x(half).mul(&Mat4::rotation_y(t));
+    scene.draw(mesh, &model, &DrawOptions::default())?;
+    Ok(())
+}
