@@ -129,11 +129,11 @@ fn output(program: &str, args: &[&str]) -> String {
         .unwrap_or_default()
 }
 
-/// Installs the thumb targets and the rustfmt/clippy components when missing.
+/// Installs the Rust targets and the rustfmt/clippy components when missing.
 fn ensure_toolchain() -> Result<(), String> {
     let installed = output("rustup", &["target", "list", "--installed"]);
     for t in TARGETS.iter().chain(&CORE_ONLY_TARGETS) {
-        if !installed.lines().any(|l| l.trim() == t) {
+        if !installed.lines().any(|l| l.trim() == *t) {
             run("rustup", &["target", "add", t])?;
         }
     }
@@ -184,12 +184,22 @@ fn ensure_qemu() -> Result<(), String> {
     apt(&install)
 }
 
+/// The real-board examples: built and linted, never run here.
+const EXAMPLES: [&str; 4] = [
+    "rp-pico-st7789",
+    "rp-pico-ssd1306",
+    "rp-pico2-st7789",
+    "esp32c3-st7789",
+];
+
 /// The firmware crates, each its own workspace, built like a user would.
-const BOARDS: [&str; 6] = [
+const BOARDS: [&str; 8] = [
     "mps2-an386",
     "mps2-an505",
     "riscv-virt",
     "microbit",
+    "rp-pico2-st7789",
+    "esp32c3-st7789",
     "rp-pico-st7789",
     "rp-pico-ssd1306",
 ];
@@ -204,6 +214,21 @@ fn test() -> Result<(), String> {
             "clippy",
             "--workspace",
             "--all-targets",
+            "--",
+            "-D",
+            "warnings",
+        ],
+    )?;
+    // The board examples' shared code (`tilerast-fw`'s `panel`), which the
+    // workspace's own build does not enable.
+    run(
+        "cargo",
+        &[
+            "clippy",
+            "-p",
+            "tilerast-fw",
+            "--features",
+            "panel",
             "--",
             "-D",
             "warnings",
@@ -265,7 +290,8 @@ fn test() -> Result<(), String> {
     // The real-board examples (the README's ST7789 and SSD1306 programs
     // as firmware) must build; they cannot run here. The QEMU boards are
     // built and run by the firmware test below.
-    for b in ["rp-pico-st7789", "rp-pico-ssd1306"] {
+    // RP2040 (ST7789, SSD1306), RP2350 and ESP32-C3 (ST7789, DMA ping-pong).
+    for b in EXAMPLES {
         let dir = format!("targets/{b}");
         run_in(&dir, "cargo", &["build", "--release"])?;
         run_in(
