@@ -68,7 +68,21 @@ struct Report {
     /// The culled city per mode: (ticks, vertices, tested, culled, drawn,
     /// commands, prims culled, reads, crc).
     culls: BTreeMap<String, [u64; 9]>,
+    /// The SSD1306 scene's RAM-against-instructions points.
+    trades: Vec<TradeLine>,
     stack_used: u64,
+}
+
+/// One `trade` line: the SSD1306 scene in one tile size and bin capacity.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct TradeLine {
+    tile: (u16, u16),
+    bins: u64,
+    bytes: u64,
+    crc: u32,
+    raster_ticks: u64,
+    flush_ticks: u64,
+    passes: u64,
 }
 
 /// One `geom` line: the vertex stage alone for a frame.
@@ -241,6 +255,21 @@ fn parse(out: &str) -> Report {
                         crc.unwrap(),
                     ],
                 );
+            }
+            Some("trade") => {
+                assert!(!w.contains(&"error"), "{line}");
+                let num = |k: &str| field(&w, k).parse::<u64>().unwrap();
+                let (tw, th) = field(&w, "tile").split_once('x').unwrap();
+                r.trades.push(TradeLine {
+                    tile: (tw.parse().unwrap(), th.parse().unwrap()),
+                    bins: num("bins"),
+                    bytes: num("bytes"),
+                    crc: u32::from_str_radix(field(&w, "crc").trim_start_matches("0x"), 16)
+                        .unwrap(),
+                    raster_ticks: num("raster_ticks"),
+                    flush_ticks: num("flush_ticks"),
+                    passes: num("bin_passes"),
+                });
             }
             Some("calibrate") => {
                 let num = |k: &str| field(&w, k).parse::<u64>().unwrap();
@@ -440,6 +469,16 @@ fn firmware_output_is_bit_identical_to_the_host() {
                 tile.0, tile.1
             );
         }
+        // The SSD1306 scene's trade points: the same pixels at every tile
+        // size and bin capacity.
+        let ssd = std::fs::read(scenes.join("ssd1306.bin")).unwrap();
+        for t in &r.trades {
+            let host = host_crc("ssd1306", &ssd, t.tile);
+            assert_eq!(
+                t.crc, host,
+                "{board}: trade point {t:?} differs from the host"
+            );
+        }
         // Running twice gives the same counts: the measurement is deterministic.
         let again = parse(&run(board, &elf));
         assert_eq!(
@@ -458,6 +497,12 @@ fn firmware_output_is_bit_identical_to_the_host() {
         assert_eq!(
             min_run.scenes["ssd1306"].crc, r.scenes["ssd1306"].crc,
             "{board}: minimal build renders differently"
+        );
+        // What a 1-bit display's firmware needs: 6 KB of RAM, stack included.
+        let ram = minimal.1 + min_run.stack_used;
+        assert!(
+            ram <= 6 * 1024,
+            "{board}: the SSD1306-only build takes {ram} bytes of RAM"
         );
         // (Built last: it replaces the full build's ELF.) The micro:bit's 256 KB of flash hold the scenes and workloads or
         // the rotating cube, not both: the cube is a build of its own.
@@ -640,6 +685,16 @@ fn firmware_output_is_bit_identical_to_the_host() {
         std::fs::write(&path, report(&reports, &v6)).unwrap();
         println!("wrote {}", Path::new(&path).display());
     }
+}
+
+/// The size of an exported scene the firmware embeds.
+fn scene_bytes(name: &str) -> u64 {
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join("scenes")
+        .join(format!("{name}.bin"));
+    std::fs::metadata(&path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .len()
 }
 
 /// The QEMU boards, one per instruction set, in the report's column order:
@@ -1105,19 +1160,53 @@ fn report(reports: &[BoardResult], v6: &Report) -> String {
             );
         }
     }
+    for b in &boards {
+        if b.trades.is_empty() {
+            continue;
+        }
+        md += &format!(
+            "\n## SSD1306: RAM against instructions ({})\n\nThe 128x64 1-bit scene (`scenes/ssd1306.toml`: \
+             a mesh, Z, 4x4 dither) rendered with each tile height and bin capacity; *RAM* is the tile \
+             (1-bit colour + 16-bit Z) and the bins, the stack's other ~1.2 KB aside. Every point's \
+             CRC equals the host's. The firmware renders the scene in the first row's configuration \
+             (one SSD1306 page a tile, 256 bin entries): the SSD1306-only build's RAM below.\n\n\
+             | tile | bin entries | RAM (tile + bins) | binning passes | raster + flush instructions | × fastest |\n\
+             | --- | ---: | ---: | ---: | ---: | ---: |\n",
+            b.board
+        );
+        let cost = |t: &TradeLine| (t.raster_ticks + t.flush_ticks) as f64 * b.instr_per_tick;
+        let best = b.trades.iter().map(cost).fold(f64::INFINITY, f64::min);
+        for t in &b.trades {
+            md += &format!(
+                "| {}x{} | {} | {} | {} | {:.2} M | {:.2} |\n",
+                t.tile.0,
+                t.tile.1,
+                t.bins,
+                t.bytes,
+                t.passes,
+                cost(t) / 1e6,
+                cost(t) / best
+            );
+        }
+    }
     md += "\n## Flash and RAM\n\nFlash is `.vector_table` + `.text` + `.rodata` (the scenes are in `.rodata`); \
            static RAM is `.data` + `.bss`; the stack high-water mark is measured by the firmware \
            (`cortex-m-rt`'s `paint-stack` on Arm; the RISC-V port paints its own). *Full*: both scenes and the workloads (on the micro:bit \
            both scenes: its workloads and the rotating cube are builds of their own); *SSD1306 only*: \
-           the features one 1-bit scene needs.\n\n| board | build | flash bytes | static RAM bytes | stack peak bytes |\n| --- | --- | ---: | ---: | ---: |\n";
+           the features one 1-bit scene needs (`--no-default-features --features ssd1306`), of whose \
+           flash the scene itself (`ssd1306.bin`, a mesh in the wire format) is the stated part; its \
+           RAM is static RAM + stack peak (target: 6 KB).\n\n\
+           | board | build | flash bytes | of which scene data | static RAM bytes | stack peak bytes |\n\
+           | --- | --- | ---: | ---: | ---: | ---: |\n";
+    let ssd_bytes = scene_bytes("ssd1306");
     for r in reports {
         let b = &r.report;
         md += &format!(
-            "| {} | full | {} | {} | {} |\n",
+            "| {} | full | {} | — | {} | {} |\n",
             b.board, r.full.0, r.full.1, b.stack_used
         );
         md += &format!(
-            "| {} | SSD1306 only | {} | {} | {} |\n",
+            "| {} | SSD1306 only | {} | {ssd_bytes} | {} | {} |\n",
             b.board, r.minimal.0, r.minimal.1, r.minimal_stack
         );
     }

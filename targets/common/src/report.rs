@@ -121,6 +121,30 @@ where
     }
 }
 
+/// Prints `trade ssd1306 tile WxH bins B bytes M crc 0x... raster_ticks R
+/// flush_ticks F bin_passes P`: the SSD1306 scene in tiles of `tile` (at
+/// most `8 N` pixels) with bins of `BC` entries, and `M` the bytes its tile
+/// and bins take — one point of the RAM-against-instructions trade.
+#[inline(never)] // its tile and bins leave the stack before the next point's
+pub fn report_ssd_trade<const N: usize, const BC: usize, const BT: usize>(
+    scene: &[u8],
+    tile: (u16, u16),
+    out: &mut impl Write,
+    clock: &mut impl Clock,
+) -> core::fmt::Result {
+    let bytes = core::mem::size_of::<Tile<N, <Ssd1306 as SceneKind>::C>>()
+        + core::mem::size_of::<Bins<BC, BT>>();
+    match scene_crc::<Ssd1306, N, BC, BT>(scene, tile, clock) {
+        Ok((crc, r)) => writeln!(
+            out,
+            "trade ssd1306 tile {}x{} bins {BC} bytes {bytes} crc 0x{crc:08x} raster_ticks {} \
+             flush_ticks {} bin_passes {}",
+            tile.0, tile.1, r.raster_ticks, r.flush_ticks, r.stats.bin_passes
+        ),
+        Err(e) => writeln!(out, "trade ssd1306 error {e}"),
+    }
+}
+
 /// Prints `phases NAME bin B clear C decode D setup S traverse T all A`:
 /// ticks to render the scene until each phase (cumulative).
 #[inline(never)]

@@ -13,7 +13,6 @@ use panic_semihosting as _;
 use tilerast_fw::board::{cortex_m::CortexM, run, Board};
 
 const DEMO_TILE: (u16, u16) = (32, 32);
-const SSD_TILE: (u16, u16) = (128, 16);
 
 /// Bin entries: 800 x 8 bytes (6.4 KB), about what the 16 KB leave beside
 /// the 5 KB tile and the stack (peak measured: see `reports/targets.md`).
@@ -26,7 +25,7 @@ fn main() -> ! {
         cpu: "cortex-m0",
         instr_per_tick: "62.5",
     };
-    run::<_, { 32 * 32 / 8 }, { 128 * 16 / 8 }, BIN_ENTRIES, 64>(
-        &board, CortexM, DEMO_TILE, SSD_TILE,
+    run::<_, { 32 * 32 / 8 }, BIN_ENTRIES, 64>(
+        &board, CortexM, DEMO_TILE,
     )
 }

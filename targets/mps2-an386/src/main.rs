@@ -10,9 +10,8 @@
 use panic_semihosting as _;
 use tilerast_fw::board::{cortex_m::CortexM, run, Board};
 
-/// The demo in its exported 64x32 tiles, the SSD1306 scene in 128x16.
+/// The demo and the teapot in the demo's exported 64x32 tiles.
 const DEMO_TILE: (u16, u16) = (64, 32);
-const SSD_TILE: (u16, u16) = (128, 16);
 
 /// Bin entries (8 bytes each): enough for the teapot frame in one pass.
 const BIN_ENTRIES: usize = 12288;
@@ -24,7 +23,5 @@ fn main() -> ! {
         cpu: "cortex-m4f",
         instr_per_tick: "40",
     };
-    run::<_, { 64 * 32 / 8 }, { 128 * 16 / 8 }, BIN_ENTRIES, 32>(
-        &board, CortexM, DEMO_TILE, SSD_TILE,
-    )
+    run::<_, { 64 * 32 / 8 }, BIN_ENTRIES, 32>(&board, CortexM, DEMO_TILE)
 }

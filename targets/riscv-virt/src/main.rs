@@ -13,9 +13,8 @@ use core::fmt::Write;
 use tilerast_fw::board::riscv::{Uart, Virt};
 use tilerast_fw::board::{run, Board, Port};
 
-/// The demo in its exported 64x32 tiles, the SSD1306 scene in 128x16.
+/// The demo and the teapot in the demo's exported 64x32 tiles.
 const DEMO_TILE: (u16, u16) = (64, 32);
-const SSD_TILE: (u16, u16) = (128, 16);
 
 /// Bin entries (8 bytes each): enough for the teapot frame in one pass.
 const BIN_ENTRIES: usize = 12288;
@@ -27,7 +26,7 @@ fn main() -> ! {
         cpu: "rv32imac",
         instr_per_tick: "1",
     };
-    run::<_, { 64 * 32 / 8 }, { 128 * 16 / 8 }, BIN_ENTRIES, 32>(&board, Virt, DEMO_TILE, SSD_TILE)
+    run::<_, { 64 * 32 / 8 }, BIN_ENTRIES, 32>(&board, Virt, DEMO_TILE)
 }
 
 /// A panic prints its message on the UART and ends QEMU with status 1.

@@ -96,17 +96,31 @@ static TEAPOT_MESH: &[u8] = include_bytes!(concat!(env!("TILERAST_SCENES"), "/te
 #[cfg(feature = "ssd1306")]
 static SSD1306: &[u8] = include_bytes!(concat!(env!("TILERAST_SCENES"), "/ssd1306.bin"));
 
-/// Runs the report on `port` and exits QEMU. `ND`/`NS` are the tile
-/// capacities (in groups of 8 pixels) for the demo and SSD1306 scenes,
-/// rendered in tiles of `demo_tile` and `ssd_tile` (the teapot in the
-/// demo's); `BC`/`BT` the bins' entries and tiles per pass.
-pub fn run<P: Port, const ND: usize, const NS: usize, const BC: usize, const BT: usize>(
+/// The SSD1306 scene as a 1-bit display's firmware renders it, on every
+/// board: in 128x8 tiles, the panel's own pages (128 bytes of pixels, 2 KB
+/// of Z), binned into 256 entries (2 KB) in as many passes as it takes —
+/// what fits the 6 KB of RAM a minimal SSD1306 build has, stack included.
+#[cfg(feature = "ssd1306")]
+const SSD_TILE: (u16, u16) = (128, 8);
+/// Its tile capacity, in groups of 8 pixels.
+#[cfg(feature = "ssd1306")]
+const SSD_GROUPS: usize = 128 * 8 / 8;
+/// Its bin entries (8 bytes each).
+#[cfg(feature = "ssd1306")]
+const SSD_BINS: usize = 256;
+/// Its tiles per binning pass: the whole 128x64 screen.
+#[cfg(feature = "ssd1306")]
+const SSD_BIN_TILES: usize = 8;
+
+/// Runs the report on `port` and exits QEMU. `ND` is the tile capacity (in
+/// groups of 8 pixels) for the demo and the teapot, rendered in tiles of
+/// `demo_tile`; `BC`/`BT` their bins' entries and tiles per pass.
+pub fn run<P: Port, const ND: usize, const BC: usize, const BT: usize>(
     b: &Board,
     port: P,
     demo_tile: (u16, u16),
-    ssd_tile: (u16, u16),
 ) -> ! {
-    let _ = (demo_tile, ssd_tile);
+    let _ = demo_tile;
     let Some((out, mut clock)) = port.start() else {
         P::exit(false)
     };
@@ -151,9 +165,11 @@ pub fn run<P: Port, const ND: usize, const NS: usize, const BC: usize, const BT:
             &mut clock,
         )?;
         #[cfg(feature = "ssd1306")]
-        crate::report::report_scene::<crate::report::Ssd1306, NS, BC, BT>(
-            SSD1306, ssd_tile, &mut out, &mut clock,
+        crate::report::report_scene::<crate::report::Ssd1306, SSD_GROUPS, SSD_BINS, SSD_BIN_TILES>(
+            SSD1306, SSD_TILE, &mut out, &mut clock,
         )?;
+        #[cfg(feature = "ssd_trade")]
+        report_ssd_trade(&mut out, &mut clock)?;
         #[cfg(feature = "bench")]
         crate::report::report_benches(&mut out, &mut clock)?;
         #[cfg(feature = "bench_extra")]
@@ -173,6 +189,22 @@ pub fn run<P: Port, const ND: usize, const NS: usize, const BC: usize, const BT:
     };
     let ok = body().is_ok();
     P::exit(ok)
+}
+
+/// The SSD1306 scene in each tile height (one page, two, the whole
+/// screen) and bin capacity: what RAM buys in instructions (feature
+/// `ssd_trade`: a copy of the 1-bit draw code per tile size, so on the
+/// 4 MB boards only).
+#[cfg(feature = "ssd_trade")]
+fn report_ssd_trade(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt::Result {
+    use crate::report::report_ssd_trade as point;
+    point::<{ 128 * 8 / 8 }, 256, 8>(SSD1306, (128, 8), out, clock)?;
+    point::<{ 128 * 8 / 8 }, 512, 8>(SSD1306, (128, 8), out, clock)?;
+    point::<{ 128 * 8 / 8 }, 2048, 8>(SSD1306, (128, 8), out, clock)?;
+    point::<{ 128 * 16 / 8 }, 256, 4>(SSD1306, (128, 16), out, clock)?;
+    point::<{ 128 * 16 / 8 }, 2048, 4>(SSD1306, (128, 16), out, clock)?;
+    point::<{ 128 * 64 / 8 }, 256, 1>(SSD1306, (128, 64), out, clock)?;
+    point::<{ 128 * 64 / 8 }, 2048, 1>(SSD1306, (128, 64), out, clock)
 }
 
 /// Frames of each rotating-mesh run.
