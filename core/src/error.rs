@@ -29,7 +29,9 @@ pub enum Error {
     BufferTooSmall,
     /// Encoded input is truncated or has an unknown tag or version.
     Malformed,
-    /// A scene's configuration does not match the tile types it is rendered with.
+    /// A scene's configuration does not match the tile types it is rendered
+    /// with, or a command's kind is one the tile's
+    /// [`CommandSet`](crate::config::CommandSet) leaves out.
     ConfigMismatch,
     /// A degenerate camera, projection, viewport or direction (a zero
     /// field of view, `near >= far`, `eye == target`, a zero vector, or a
@@ -48,7 +50,9 @@ impl core::fmt::Display for Error {
             Error::TileTooLarge => "tile rectangle exceeds tile capacity",
             Error::BufferTooSmall => "output buffer too small",
             Error::Malformed => "malformed encoded data",
-            Error::ConfigMismatch => "scene configuration does not match the tile types",
+            Error::ConfigMismatch => {
+                "scene configuration (or a command kind) does not match the tile types"
+            }
             Error::Degenerate => "degenerate camera, projection, viewport or direction",
         })
     }

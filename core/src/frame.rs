@@ -584,6 +584,10 @@ impl Frame {
                 if tile.finish() {
                     replay(tile);
                 }
+                // A command kind the tile's `CommandSet` leaves out.
+                if core::mem::take(&mut tile.refused) {
+                    return Err(FlushError::Raster(Error::ConfigMismatch));
+                }
                 done(tile).map_err(FlushError::Target)?;
                 stats.tiles += 1;
             }

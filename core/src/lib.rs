@@ -113,7 +113,10 @@ pub mod prelude {
     pub use crate::area::AreaAa;
     pub use crate::bin::Bins;
     pub use crate::command::{Blend, Command, Cull, QuadVertex, SpanCmd, State, Vertex};
-    pub use crate::config::{groups, Planes, Ssd1306Config, St7789Config, TileConfig};
+    pub use crate::config::{
+        groups, AllCommands, CommandSet, MeshPlanes, Planes, Ssd1306Config, St7789Config,
+        TileConfig, Triangles,
+    };
     pub use crate::coverage::NoAa;
     pub use crate::error::{Error, FlushError};
     pub use crate::format::{

@@ -1169,7 +1169,7 @@ fn report(reports: &[BoardResult], v6: &Report) -> String {
              a mesh, Z, 4x4 dither) rendered with each tile height and bin capacity; *RAM* is the tile \
              (1-bit colour + 16-bit Z) and the bins, the stack's other ~1.2 KB aside. Every point's \
              CRC equals the host's. The firmware renders the scene in the first row's configuration \
-             (one SSD1306 page a tile, 256 bin entries): the SSD1306-only build's RAM below.\n\n\
+             (one SSD1306 page a tile, 224 bin entries): the SSD1306-only build's RAM below.\n\n\
              | tile | bin entries | RAM (tile + bins) | binning passes | raster + flush instructions | × fastest |\n\
              | --- | ---: | ---: | ---: | ---: | ---: |\n",
             b.board

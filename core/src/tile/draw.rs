@@ -11,7 +11,7 @@
 
 use super::{Phase, Tile};
 use crate::command::{Blend, Command, QuadVertex, SpanCmd, State};
-use crate::config::TileConfig;
+use crate::config::{CommandSet, TileConfig};
 use crate::error::Error;
 use crate::format::{ColorPlane, Lanes, PixelFormat, Rgb};
 use crate::fragment::dither::{round_bias, Dither};
@@ -69,9 +69,15 @@ where
     /// Validates and draws one command, clipped to the tile, a textured
     /// triangle with its texture from `textures`
     /// ([`Command::Textured`]).
+    /// A command of a kind the configuration's
+    /// [`CommandSet`](crate::config::CommandSet) leaves out draws nothing
+    /// and is [`Error::ConfigMismatch`].
     pub fn draw_textured(&mut self, cmd: &Command, textures: &[Texture<'_>]) -> Result<(), Error> {
         cmd.validate()?;
         self.draw_valid(cmd, textures);
+        if core::mem::take(&mut self.refused) {
+            return Err(Error::ConfigMismatch);
+        }
         Ok(())
     }
 
@@ -100,6 +106,12 @@ where
     }
 
     pub(crate) fn draw_valid(&mut self, cmd: &Command, textures: &[Texture<'_>]) {
+        if !<C::Commands as CommandSet>::draws(cmd) {
+            // Not compiled in (each arm below tests the set's constant too).
+            self.refused = true;
+            return;
+        }
+        let all = <C::Commands as CommandSet>::ALL;
         if A::SAMPLES > 0 {
             // Masked and translucent solids go over the resolved pixels.
             let late = match cmd {
@@ -129,7 +141,7 @@ where
                 ) if late => {}
                 (false, Command::Triangle { v, state }) => return self.triangle_aa(v, state),
                 // Coverage samples hold one colour per fragment: Gouraud.
-                (false, Command::Quadratic { v, state, .. }) => {
+                (false, Command::Quadratic { v, state, .. }) if all => {
                     return self.triangle_aa(&v.map(|q| q.vertex()), state)
                 }
                 (
@@ -171,7 +183,7 @@ where
         }
         match cmd {
             Command::Triangle { v, state } => self.gouraud(v, state),
-            Command::Quadratic { alpha, v, state } => self.quadratic(v, *alpha, state),
+            Command::Quadratic { alpha, v, state } if all => self.quadratic(v, *alpha, state),
             Command::Textured {
                 tex,
                 alpha,
@@ -187,9 +199,14 @@ where
                     _ => self.gouraud(&vs, state),
                 }
             }
-            Command::Span { span, state } => self.span_cmd(span, state),
-            Command::Line { line, state } => self.line(line, state),
-            Command::Edge { edge, state } => self.edge(edge, state),
+            Command::Span { span, state } if all => self.span_cmd(span, state),
+            Command::Line { line, state } if all => self.line(line, state),
+            Command::Edge { edge, state } if all => self.edge(edge, state),
+            // Left out by the command set (refused above).
+            Command::Quadratic { .. }
+            | Command::Span { .. }
+            | Command::Line { .. }
+            | Command::Edge { .. } => {}
             Command::Fill {
                 rect,
                 color,

@@ -99,6 +99,10 @@ pub struct Tile<const N: usize, C: TileConfig> {
     pub(crate) area: Rect,
     /// Coverage resolved into the colour plane ([`Tile::finish`]).
     resolved: bool,
+    /// A command of a kind the configuration's `CommandSet` leaves out
+    /// reached the tile since [`Tile::begin`] (reported as
+    /// [`Error::ConfigMismatch`]).
+    pub(crate) refused: bool,
     _config: PhantomData<C>,
 }
 
@@ -147,6 +151,7 @@ where
             aa: <A::Plane<N> as AaPlane>::NEW,
             area: Rect::new(0, 0, 0, 0),
             resolved: false,
+            refused: false,
             _config: PhantomData,
         }
     }
@@ -203,6 +208,7 @@ where
         }
         self.area = area;
         self.resolved = false;
+        self.refused = false;
         let c = F::pack_rgb(clear.color);
         for i in 0..area.area() as usize {
             self.color.set(i, c);

@@ -1,15 +1,17 @@
 //! What the ST7789 board examples share (feature `panel`): the panel's
-//! window commands over any `embedded-hal` SPI bus, the bus-and-chip-select
-//! `SpiDevice` a panel driver initialises through (given back afterwards
-//! for DMA), and the turning cube's camera and motion, in either geometry
-//! back end (`Fx` on a Cortex-M0+, `f32` where there is an FPU).
+//! set-up through `mipidsi` over any `embedded-hal` SPI bus, giving the bus
+//! back for DMA; its window commands; and the turning cube's camera and
+//! motion, in either geometry back end (`Fx` on a Cortex-M0+ or an
+//! ESP32-C3, `f32` where there is an FPU).
 //!
 //! A board example is then its HAL's set-up, its DMA ping-pong and its
 //! log: `targets/rp-pico-st7789` (RP2040), `targets/rp-pico2-st7789`
 //! (RP2350), `targets/esp32c3-st7789` (ESP32-C3).
 
+use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::OutputPin;
 use embedded_hal::spi::{ErrorType, Operation, SpiBus, SpiDevice};
+use mipidsi::{interface::SpiInterface, models::ST7789, options::ColorInversion, Builder};
 use tilerast::geometry::{Angle, DrawOptions, Lighting, Mat4, Mesh, Real, Scene};
 use tilerast::prelude::{Error, Rect};
 
@@ -40,6 +42,38 @@ pub fn window<B: SpiBus, D: OutputPin>(bus: &mut B, dc: &mut D, a: Rect) -> Resu
     command(bus, dc, 0x2A, &be(a.x, a.w))?;
     command(bus, dc, 0x2B, &be(a.y, a.h))?;
     command(bus, dc, 0x2C, &[])
+}
+
+/// Initialises a 240x240 ST7789 (colours inverted, as the common IPS
+/// modules want) through `mipidsi` on `bus` with chip select `cs`,
+/// data/command `dc` and reset `rst`, then gives back the bus, the chip
+/// select (held low: the panel stays selected) and DC, for DMA transfers.
+pub fn init_st7789<B, CS, DC, RST>(
+    bus: B,
+    cs: CS,
+    dc: DC,
+    rst: RST,
+    delay: &mut impl DelayNs,
+) -> Result<(B, CS, DC), &'static str>
+where
+    B: SpiBus,
+    CS: OutputPin,
+    DC: OutputPin,
+    RST: OutputPin,
+{
+    let mut buffer = [0u8; 512];
+    let di = SpiInterface::new(Device { bus, cs }, dc, &mut buffer);
+    let display = Builder::new(ST7789, di)
+        .display_size(240, 240)
+        .invert_colors(ColorInversion::Inverted)
+        .reset_pin(rst)
+        .init(delay)
+        .map_err(|_| "ST7789 initialisation failed")?;
+    let (di, _model, _rst) = display.release();
+    let (device, dc) = di.release();
+    let Device { bus, mut cs } = device;
+    cs.set_low().map_err(|_| "chip select")?;
+    Ok((bus, cs, dc))
 }
 
 /// An SPI bus and its chip select as the `SpiDevice` a panel driver

@@ -50,10 +50,12 @@ impl SceneKind for TeapotCull {
     const LABEL: Option<&'static str> = None;
 }
 
-/// `scenes/ssd1306.toml`: 1 bit per pixel, Z, 4x4 dither.
+/// `scenes/ssd1306.toml`: 1 bit per pixel, Z, 4x4 dither; a mesh, so its
+/// tile draws triangles and fills only ([`Triangles`]: no line, span, edge
+/// or fast-Phong code in its firmware).
 pub struct Ssd1306;
 impl SceneKind for Ssd1306 {
-    type C = Planes<BinaryFormat, Depth16, NoWid, Bayer4>;
+    type C = MeshPlanes<BinaryFormat, Depth16, NoWid, Bayer4>;
     const NAME: &'static str = "ssd1306";
     const LABEL: Option<&'static str> = None;
 }

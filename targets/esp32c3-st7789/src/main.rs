@@ -22,10 +22,9 @@ use esp_hal::spi::Mode;
 use esp_hal::time::{Instant, Rate};
 use esp_hal::{dma_tx_buffer, Blocking};
 use esp_println::println;
-use mipidsi::{interface::SpiInterface, models::ST7789, options::ColorInversion, Builder};
 use tilerast::geometry::{Angle, Fx, Mesh, Scene, VertexSlot, CUBE_BYTES};
 use tilerast::prelude::*;
-use tilerast_fw::panel::{camera, turn, window, Device};
+use tilerast_fw::panel::{camera, init_st7789, turn, window};
 
 esp_bootloader_esp_idf::esp_app_desc!();
 
@@ -55,19 +54,9 @@ fn main() -> ! {
         .expect("SPI configuration")
         .with_sck(p.GPIO6)
         .with_mosi(p.GPIO7);
-    let mut buffer = [0u8; 512];
-    let di = SpiInterface::new(Device { bus, cs }, dc, &mut buffer);
-    let display = Builder::new(ST7789, di)
-        .display_size(240, 240)
-        .invert_colors(ColorInversion::Inverted)
-        .reset_pin(rst)
-        .init(&mut Delay::new())
-        .expect("ST7789 initialisation");
-    // Initialised: take the bus back for DMA, chip select held low.
-    let (di, _model, _rst) = display.release();
-    let (spi, mut dc) = di.release();
-    let Device { bus, mut cs } = spi;
-    cs.set_low();
+    // Initialised, the bus comes back for DMA (chip select held low).
+    let (bus, _cs, mut dc) =
+        init_st7789(bus, cs, dc, rst, &mut Delay::new()).expect("ST7789 initialisation");
     let mut link = Some(Link::Idle(bus.with_dma(p.DMA_CH0)));
     let mut next = Some(dma_tx_buffer!(TILE_BYTES).expect("DMA buffer"));
     let mut spare = Some(dma_tx_buffer!(TILE_BYTES).expect("DMA buffer"));

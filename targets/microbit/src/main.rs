@@ -25,7 +25,5 @@ fn main() -> ! {
         cpu: "cortex-m0",
         instr_per_tick: "62.5",
     };
-    run::<_, { 32 * 32 / 8 }, BIN_ENTRIES, 64>(
-        &board, CortexM, DEMO_TILE,
-    )
+    run::<_, { 32 * 32 / 8 }, BIN_ENTRIES, 64>(&board, CortexM, DEMO_TILE)
 }

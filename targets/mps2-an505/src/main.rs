@@ -25,7 +25,5 @@ fn main() -> ! {
         cpu: "cortex-m33",
         instr_per_tick: "50",
     };
-    run::<_, { 64 * 32 / 8 }, BIN_ENTRIES, 32>(
-        &board, CortexM, DEMO_TILE,
-    )
+    run::<_, { 64 * 32 / 8 }, BIN_ENTRIES, 32>(&board, CortexM, DEMO_TILE)
 }

@@ -19,13 +19,11 @@
 
 mod tiles;
 
-use embedded_hal::digital::OutputPin;
 use hal::dma::DMAExt;
-use mipidsi::{interface::SpiInterface, models::ST7789, options::ColorInversion, Builder};
 use rp_pico::entry;
 use rp_pico::hal::{self, clocks::Clock, fugit::RateExtU32, gpio, pac, spi, Timer};
 use tilerast::geometry::Fx;
-use tilerast_fw::panel::Device;
+use tilerast_fw::panel::init_st7789;
 use {defmt_rtt as _, panic_probe as _};
 
 #[entry]
@@ -63,20 +61,8 @@ fn main() -> ! {
         embedded_hal::spi::MODE_0,
     );
     let mut timer = Timer::new(pac.TIMER, &mut pac.RESETS, &clocks);
-    let spi = Device { bus, cs };
-    let mut buffer = [0u8; 512];
-    let di = SpiInterface::new(spi, dc, &mut buffer);
-    let display = Builder::new(ST7789, di)
-        .display_size(240, 240)
-        .invert_colors(ColorInversion::Inverted)
-        .reset_pin(rst)
-        .init(&mut timer)
-        .unwrap();
-    // Initialised: take the bus back for DMA, chip select held low.
-    let (di, _model, _rst) = display.release();
-    let (spi, dc) = di.release();
-    let Device { bus, mut cs } = spi;
-    let _ = cs.set_low();
+    // Initialised, the bus comes back for DMA (chip select held low).
+    let (bus, _cs, dc) = init_st7789(bus, cs, dc, rst, &mut timer).unwrap();
     let dma = pac.DMA.split(&mut pac.RESETS);
     // Fixed point: the Cortex-M0+ has no FPU.
     tiles::run::<Fx, _, _>(dma.ch0, bus, dc, || timer.get_counter().ticks())

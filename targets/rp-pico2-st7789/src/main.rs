@@ -16,12 +16,10 @@
 #[path = "../../rp-pico-st7789/src/tiles.rs"]
 mod tiles;
 
-use embedded_hal::digital::OutputPin;
 use hal::dma::DMAExt;
 use hal::{clocks::Clock, fugit::RateExtU32, gpio, pac, spi, Timer};
-use mipidsi::{interface::SpiInterface, models::ST7789, options::ColorInversion, Builder};
 use rp235x_hal as hal;
-use tilerast_fw::panel::Device;
+use tilerast_fw::panel::init_st7789;
 use {defmt_rtt as _, panic_probe as _};
 
 /// The boot ROM's image definition: a secure Arm executable.
@@ -67,20 +65,8 @@ fn main() -> ! {
         embedded_hal::spi::MODE_0,
     );
     let mut timer = Timer::new_timer0(pac.TIMER0, &mut pac.RESETS, &clocks);
-    let spi = Device { bus, cs };
-    let mut buffer = [0u8; 512];
-    let di = SpiInterface::new(spi, dc, &mut buffer);
-    let display = Builder::new(ST7789, di)
-        .display_size(240, 240)
-        .invert_colors(ColorInversion::Inverted)
-        .reset_pin(rst)
-        .init(&mut timer)
-        .unwrap();
-    // Initialised: take the bus back for DMA, chip select held low.
-    let (di, _model, _rst) = display.release();
-    let (spi, dc) = di.release();
-    let Device { bus, mut cs } = spi;
-    let _ = cs.set_low();
+    // Initialised, the bus comes back for DMA (chip select held low).
+    let (bus, _cs, dc) = init_st7789(bus, cs, dc, rst, &mut timer).unwrap();
     let dma = pac.DMA.split(&mut pac.RESETS);
     // `f32`: the Cortex-M33 has an FPU.
     tiles::run::<f32, _, _>(dma.ch0, bus, dc, || timer.get_counter().ticks())
