@@ -1,5 +1,6 @@
-//! Puts `memory.x` where the linker finds it and rebuilds when the exported
-//! scenes change.
+//! The QEMU boards' build script (each board's `build = "../common/board-build.rs"`):
+//! puts the board's `memory.x` where the linker finds it and rebuilds when
+//! the exported scenes change.
 use std::{env, fs, path::PathBuf};
 
 fn main() {
