@@ -18,7 +18,7 @@ use tilerast_fw::report::{scene_crc, Demo, Ssd1306, Teapot, TeapotCull};
 use tilerast_fw::workloads::{self, FILL_CMDS, LARGE_TRIANGLE_CMDS, LINE_CMDS, TRIANGLE_CMDS};
 
 mod qemu;
-use qemu::{build_for, build_with, export_scenes, run_with};
+use qemu::{build_for, build_small, build_with, export_scenes, run_with};
 
 /// Builds a board's firmware with `features` (its default ones for `None`).
 fn build(board: &str, scenes: &Path, features: Option<&str>) -> PathBuf {
@@ -504,6 +504,18 @@ fn firmware_output_is_bit_identical_to_the_host() {
             ram <= 6 * 1024,
             "{board}: the SSD1306-only build takes {ram} bytes of RAM"
         );
+        // The same built for size: flash against instructions.
+        let small_elf = build_small(board, &scenes, Some("ssd1306"));
+        let small = sizes(&small_elf);
+        let small_run = parse(&run(board, &small_elf));
+        assert_eq!(
+            small_run.scenes["ssd1306"].crc, r.scenes["ssd1306"].crc,
+            "{board}: the build for size renders differently"
+        );
+        let frame_instr = |run: &Report| {
+            let l = &run.scenes["ssd1306"];
+            ((l.raster_ticks + l.flush_ticks) as f64 * run.instr_per_tick) as u64
+        };
         // (Built last: it replaces the full build's ELF.) The micro:bit's 256 KB of flash hold the scenes and workloads or
         // the rotating cube, not both: the cube is a build of its own.
         if board == "microbit" {
@@ -663,6 +675,10 @@ fn firmware_output_is_bit_identical_to_the_host() {
             full,
             minimal,
             minimal_stack: min_run.stack_used,
+            minimal_frame: frame_instr(&min_run),
+            small,
+            small_stack: small_run.stack_used,
+            small_frame: frame_instr(&small_run),
             report: r,
         });
     }
@@ -762,6 +778,12 @@ struct BoardResult {
     /// (flash, static RAM) of the build with only what the SSD1306 scene needs.
     minimal: (u64, u64),
     minimal_stack: u64,
+    /// Instructions of its SSD1306 frame.
+    minimal_frame: u64,
+    /// The same built for size (`opt-level = "s"`).
+    small: (u64, u64),
+    small_stack: u64,
+    small_frame: u64,
 }
 
 /// Markdown rows: for each `(label, bench, elements)`, every board's
@@ -1195,19 +1217,33 @@ fn report(reports: &[BoardResult], v6: &Report) -> String {
            both scenes: its workloads and the rotating cube are builds of their own); *SSD1306 only*: \
            the features one 1-bit scene needs (`--no-default-features --features ssd1306`), of whose \
            flash the scene itself (`ssd1306.bin`, a mesh in the wire format) is the stated part; its \
-           RAM is static RAM + stack peak (target: 6 KB).\n\n\
-           | board | build | flash bytes | of which scene data | static RAM bytes | stack peak bytes |\n\
-           | --- | --- | ---: | ---: | ---: | ---: |\n";
+           RAM is static RAM + stack peak (target: 6 KB, asserted); *for size*: the same in cargo \
+           profile `small` (`opt-level = \"s\"`; the micro:bit's release builds are already). \
+           *SSD1306 frame*: the scene's raster and flush instructions.\n\n\
+           | board | build | flash bytes | of which scene data | static RAM bytes | stack peak bytes | SSD1306 frame instructions |\n\
+           | --- | --- | ---: | ---: | ---: | ---: | ---: |\n";
     let ssd_bytes = scene_bytes("ssd1306");
     for r in reports {
         let b = &r.report;
         md += &format!(
-            "| {} | full | {} | — | {} | {} |\n",
+            "| {} | full | {} | — | {} | {} | — |\n",
             b.board, r.full.0, r.full.1, b.stack_used
         );
         md += &format!(
-            "| {} | SSD1306 only | {} | {ssd_bytes} | {} | {} |\n",
-            b.board, r.minimal.0, r.minimal.1, r.minimal_stack
+            "| {} | SSD1306 only | {} | {ssd_bytes} | {} | {} | {:.2} M |\n",
+            b.board,
+            r.minimal.0,
+            r.minimal.1,
+            r.minimal_stack,
+            r.minimal_frame as f64 / 1e6
+        );
+        md += &format!(
+            "| {} | SSD1306 only, for size | {} | {ssd_bytes} | {} | {} | {:.2} M |\n",
+            b.board,
+            r.small.0,
+            r.small.1,
+            r.small_stack,
+            r.small_frame as f64 / 1e6
         );
     }
     md

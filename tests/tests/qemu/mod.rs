@@ -46,11 +46,33 @@ pub fn build_for(
     features: Option<&str>,
     profile: bool,
 ) -> PathBuf {
+    build_in("release", board, triple, scenes, features, profile)
+}
+
+/// [`build_with`] in the boards' cargo profile `small` (`opt-level =
+/// "s"`), without the profiler's marks: flash against instructions.
+#[allow(dead_code)] // the profile test does not use it
+pub fn build_small(board: &str, scenes: &Path, features: Option<&str>) -> PathBuf {
+    build_in("small", board, None, scenes, features, false)
+}
+
+/// The builds above, in cargo profile `cargo_profile`.
+fn build_in(
+    cargo_profile: &str,
+    board: &str,
+    triple: Option<&str>,
+    scenes: &Path,
+    features: Option<&str>,
+    profile: bool,
+) -> PathBuf {
     let dir = repo().join("targets").join(board);
     let mut cmd = Process::new(cargo());
-    cmd.current_dir(&dir)
-        .env("TILERAST_SCENES", scenes)
-        .args(["build", "--release", "--quiet"]);
+    cmd.current_dir(&dir).env("TILERAST_SCENES", scenes).args([
+        "build",
+        "--profile",
+        cargo_profile,
+        "--quiet",
+    ]);
     if let Some(t) = triple {
         cmd.args(["--target", t]);
     }
@@ -76,7 +98,7 @@ pub fn build_for(
         .unwrap_or_else(|| dir.join("target"));
     target
         .join(triple)
-        .join("release")
+        .join(cargo_profile)
         .join(format!("tilerast-{board}"))
 }
 
