@@ -70,7 +70,7 @@ where
     /// triangle with its texture from `textures`
     /// ([`Command::Textured`]).
     /// A command of a kind the configuration's
-    /// [`CommandSet`](crate::config::CommandSet) leaves out draws nothing
+    /// [`CommandSet`] leaves out draws nothing
     /// and is [`Error::ConfigMismatch`].
     pub fn draw_textured(&mut self, cmd: &Command, textures: &[Texture<'_>]) -> Result<(), Error> {
         cmd.validate()?;
