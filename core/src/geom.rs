@@ -183,6 +183,33 @@ impl Vertex {
         self
     }
 
+    /// An opaque vertex at whole pixel `(x, y)` (the pixel's top-left
+    /// corner; add 8 sub-pixels, half a pixel, for its centre): integer
+    /// only, no soft float on a chip without an FPU.
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// let v = Vertex::px(10, -3, 500, Rgb::new(255, 0, 0));
+    /// assert_eq!((v.x, v.y), (Coord::from_num(10), Coord::from_num(-3)));
+    /// assert_eq!(Vertex::subpx(168, 8, 0, Rgb::default()).x, Coord::from_num(10.5));
+    /// ```
+    pub const fn px(x: i16, y: i16, z: u16, color: Rgb) -> Self {
+        Vertex::subpx(
+            x as i32 * SUBPIXEL as i32,
+            y as i32 * SUBPIXEL as i32,
+            z,
+            color,
+        )
+    }
+
+    /// An opaque vertex at `(x, y)` in sixteenths of a pixel (the
+    /// coordinates' 4 sub-pixel bits), integer only. A vertex outside the
+    /// documented range is refused when its command is drawn
+    /// ([`Vertex::validate`]).
+    pub const fn subpx(x: i32, y: i32, z: u16, color: Rgb) -> Self {
+        Vertex::new(Coord::from_bits(x), Coord::from_bits(y), z, color)
+    }
+
     /// A vertex at an `embedded-graphics` point (whole pixels: the corner
     /// of pixel `p`; add half a pixel for its centre).
     ///

@@ -97,6 +97,8 @@ pub mod occlusion;
 pub mod texture;
 pub mod tile;
 pub mod volume;
+// The object a firmware keeps across frames, over all of the above.
+pub mod renderer;
 
 // Beside the pipeline.
 pub mod hash;
@@ -123,10 +125,12 @@ pub mod prelude {
         BinaryFormat, Gray8Format, Half, PixelFormat, Rgb, Rgb444, Rgb444Format, Rgb444PairFormat,
         Rgb565Format, Rgb888Format,
     };
-    pub use crate::fragment::dither::{Bayer, Bayer2, Bayer4, Bayer8, Dither, NoDither};
+    pub use crate::fragment::dither::{
+        Bayer, Bayer2, Bayer4, Bayer8, Dither, NoDither, RuntimeDither,
+    };
     pub use crate::fragment::{
         AlphaBlending, BlendMode, Depth16, Depth24, Depth32, DepthMode, GouraudShading, NoBlending,
-        NoDepth, NoWid, QuadraticShading, ShadingMode, Wid8, WidMode,
+        NoDepth, NoWid, QuadraticShading, ShadingMode, Switchable, Wid8, WidMode,
     };
     pub use crate::frame::{Clear, CommandSource, Damage, Frame, FrameStats, Phase, WithTextures};
     pub use crate::geom::Rect;
@@ -135,6 +139,7 @@ pub mod prelude {
         Bits, ColorFix, ColorStep, Coord, FullPrecision, PlaneContract, Precision, ZFix, ZStep,
     };
     pub use crate::raster::line::{LineCmd, LineStyle};
+    pub use crate::renderer::Renderer;
     pub use crate::texture::{
         AffineTexturing, ExactTexturing, Filter, NoTexturing, QuadraticTexturing, TexFormat,
         TexVertex, Texture, TextureMode, Wrap,

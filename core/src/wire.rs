@@ -947,7 +947,7 @@ impl SceneHeader {
             height,
             tile,
             format,
-            dither_log2: <C::Dither as Dither>::LOG2 as u8,
+            dither_log2: <C::Dither as Dither>::NEW.log2() as u8,
             depth_bits: <C::Depth as DepthMode>::BITS as u8,
             wid_bits: <C::Wid as WidMode>::BITS as u8,
             clear,

@@ -259,13 +259,13 @@ pub fn render_timed(cfg: &Config, cmds: &[Command], runs: usize) -> Result<Rende
                     v.iter_mut().for_each(|v| v.edge_flag = false);
                 }
             }
-            by_format::<tilerast::area::AreaAa, SIM_GROUPS>(cfg, &plain, runs)
+            by_format::<tilerast::area::AreaAa, HostDepth, SIM_GROUPS>(cfg, &plain, runs)
         }
-        AaKind::None => by_format::<tilerast::area::AreaAa, SIM_GROUPS>(cfg, cmds, runs),
+        AaKind::None => by_format::<tilerast::area::AreaAa, HostDepth, SIM_GROUPS>(cfg, cmds, runs),
         AaKind::Area => {
             let mut flagged = cmds.to_vec();
             crate::mesh::flag_silhouettes(&mut flagged);
-            by_format::<tilerast::area::AreaAa, SIM_GROUPS>(cfg, &flagged, runs)
+            by_format::<tilerast::area::AreaAa, HostDepth, SIM_GROUPS>(cfg, &flagged, runs)
         }
         AaKind::Ruf4 => aa_format::<Ruf4>(cfg, cmds, runs),
         AaKind::Ruf8 => aa_format::<Ruf8>(cfg, cmds, runs),
@@ -278,112 +278,53 @@ pub fn render_timed(cfg: &Config, cmds: &[Command], runs: usize) -> Result<Rende
     }
 }
 
-fn by_format<A: AaMode, const G: usize>(
+/// The depth plane of the simulator's tiles: present or not as the scene
+/// says, one compiled pipeline for both (pixels equal a tile without the
+/// plane when it is off: tested in the core).
+pub type HostDepth = Switchable<Depth16>;
+/// The window-ID plane of the simulator's tiles ([`HostDepth`]'s kind).
+pub type HostWid = Switchable<Wid8>;
+
+/// `log2` of a dither matrix side as a scene names it (0 or 1: none, 2,
+/// 4, 8, 16); `None` for any other.
+pub fn dither_log2(side: u8) -> Option<u32> {
+    match side {
+        0 | 1 => Some(0),
+        2 | 4 | 8 | 16 => Some(side.trailing_zeros()),
+        _ => None,
+    }
+}
+
+/// The simulator's pipelines: one per colour format and coverage mode —
+/// depth, window ID and dither are values ([`HostDepth`], [`HostWid`],
+/// [`RuntimeDither`]), not types, so the build compiles a handful of
+/// pipelines rather than one per combination (a cold release build went
+/// from 11.6 min and 9.5 GB of memory to about 2 min and 2 GB: the README's
+/// build figures). With coverage antialiasing the depth test is always on
+/// (a depth per sample; the depth plane then holds each pixel's nearest
+/// sample for the lines drawn over the resolved image).
+fn by_format<A: AaMode, Z: DepthMode, const G: usize>(
     cfg: &Config,
     cmds: &[Command],
     runs: usize,
 ) -> Result<Rendered, Error> {
+    if dither_log2(cfg.dither).is_none() {
+        return Err(Error::BadSize);
+    }
+    type P<F, Z, A> =
+        Planes<F, Z, HostWid, RuntimeDither, A, FullPrecision, AlphaBlending, QuadraticShading>;
     match cfg.format {
-        FormatKind::Rgb888 => by_depth::<Rgb888Format, A, G>(cfg, cmds, runs),
-        FormatKind::Rgb565 => by_depth::<Rgb565Format, A, G>(cfg, cmds, runs),
-        FormatKind::Rgb444 => by_depth::<Rgb444Format, A, G>(cfg, cmds, runs),
-        FormatKind::Gray8 => by_depth::<Gray8Format, A, G>(cfg, cmds, runs),
-        FormatKind::Binary => by_depth::<BinaryFormat, A, G>(cfg, cmds, runs),
+        FormatKind::Rgb888 => render_source::<P<Rgb888Format, Z, A>, _, G>(cfg, cmds, runs),
+        FormatKind::Rgb565 => render_source::<P<Rgb565Format, Z, A>, _, G>(cfg, cmds, runs),
+        FormatKind::Rgb444 => render_source::<P<Rgb444Format, Z, A>, _, G>(cfg, cmds, runs),
+        FormatKind::Gray8 => render_source::<P<Gray8Format, Z, A>, _, G>(cfg, cmds, runs),
+        FormatKind::Binary => render_source::<P<BinaryFormat, Z, A>, _, G>(cfg, cmds, runs),
     }
 }
 
-fn by_depth<F: PixelFormat, A: AaMode, const G: usize>(
-    cfg: &Config,
-    cmds: &[Command],
-    runs: usize,
-) -> Result<Rendered, Error>
-where
-    Rgb888: From<F::Color>,
-{
-    if cfg.depth {
-        by_wid::<F, Depth16, A, G>(cfg, cmds, runs)
-    } else {
-        by_wid::<F, NoDepth, A, G>(cfg, cmds, runs)
-    }
-}
-
-/// With coverage antialiasing the simulator builds fewer tile types, to
-/// keep its build time in check: the depth test is always on (a depth per
-/// sample; the depth plane then holds each pixel's nearest sample for the
-/// lines drawn over the resolved image), and the dithers are the ones
-/// the scenes use (none, 4x4, 8x8).
+/// [`by_format`] with a coverage plane of mode `A`.
 fn aa_format<A: AaMode>(cfg: &Config, cmds: &[Command], runs: usize) -> Result<Rendered, Error> {
-    fn wid<F: PixelFormat, A: AaMode>(
-        cfg: &Config,
-        cmds: &[Command],
-        runs: usize,
-    ) -> Result<Rendered, Error>
-    where
-        Rgb888: From<F::Color>,
-    {
-        if cfg.wid {
-            dither::<F, Wid8, A>(cfg, cmds, runs)
-        } else {
-            dither::<F, NoWid, A>(cfg, cmds, runs)
-        }
-    }
-    fn dither<F: PixelFormat, W: WidMode, A: AaMode>(
-        cfg: &Config,
-        cmds: &[Command],
-        runs: usize,
-    ) -> Result<Rendered, Error>
-    where
-        Rgb888: From<F::Color>,
-    {
-        match cfg.dither {
-            0 | 1 => {
-                render_as::<F, Depth16, W, NoDither, A, FullPrecision, AA_GROUPS>(cfg, cmds, runs)
-            }
-            4 => render_as::<F, Depth16, W, Bayer4, A, FullPrecision, AA_GROUPS>(cfg, cmds, runs),
-            8 => render_as::<F, Depth16, W, Bayer8, A, FullPrecision, AA_GROUPS>(cfg, cmds, runs),
-            _ => Err(Error::BadSize),
-        }
-    }
-    match cfg.format {
-        FormatKind::Rgb888 => wid::<Rgb888Format, A>(cfg, cmds, runs),
-        FormatKind::Rgb565 => wid::<Rgb565Format, A>(cfg, cmds, runs),
-        FormatKind::Rgb444 => wid::<Rgb444Format, A>(cfg, cmds, runs),
-        FormatKind::Gray8 => wid::<Gray8Format, A>(cfg, cmds, runs),
-        FormatKind::Binary => wid::<BinaryFormat, A>(cfg, cmds, runs),
-    }
-}
-
-fn by_wid<F: PixelFormat, Z: DepthMode, A: AaMode, const G: usize>(
-    cfg: &Config,
-    cmds: &[Command],
-    runs: usize,
-) -> Result<Rendered, Error>
-where
-    Rgb888: From<F::Color>,
-{
-    if cfg.wid {
-        by_dither::<F, Z, Wid8, A, G>(cfg, cmds, runs)
-    } else {
-        by_dither::<F, Z, NoWid, A, G>(cfg, cmds, runs)
-    }
-}
-
-fn by_dither<F: PixelFormat, Z: DepthMode, W: WidMode, A: AaMode, const G: usize>(
-    cfg: &Config,
-    cmds: &[Command],
-    runs: usize,
-) -> Result<Rendered, Error>
-where
-    Rgb888: From<F::Color>,
-{
-    match cfg.dither {
-        0 | 1 => render_as::<F, Z, W, NoDither, A, FullPrecision, G>(cfg, cmds, runs),
-        2 => render_as::<F, Z, W, Bayer2, A, FullPrecision, G>(cfg, cmds, runs),
-        4 => render_as::<F, Z, W, Bayer4, A, FullPrecision, G>(cfg, cmds, runs),
-        8 => render_as::<F, Z, W, Bayer8, A, FullPrecision, G>(cfg, cmds, runs),
-        16 => render_as::<F, Z, W, Bayer<4>, A, FullPrecision, G>(cfg, cmds, runs),
-        _ => Err(Error::BadSize),
-    }
+    by_format::<A, Depth16, AA_GROUPS>(cfg, cmds, runs)
 }
 
 /// The frame and a boxed tile of `G` groups for `cfg`, the tile shrunk
@@ -403,7 +344,15 @@ pub(crate) fn frame_and_tile<C: TileConfig, const G: usize>(
     let mut frame = Frame::new(cfg.width, cfg.height, tw, th)?;
     frame.clear = cfg.clear;
     frame.cull = cfg.cull;
-    Ok((frame, Box::default()))
+    let mut tile: Box<Tile<G, C>> = Box::default();
+    // The planes and dither `cfg` names, where they are values (planes
+    // and dithers fixed by type keep theirs).
+    tile.enable_depth(cfg.depth);
+    tile.enable_wid(cfg.wid);
+    if let Some(d) = dither_log2(cfg.dither).and_then(C::Dither::with_log2) {
+        tile.set_dither(d);
+    }
+    Ok((frame, tile))
 }
 
 /// The simulator's bins: 65,536 (tile, command) entries, 1,024 tiles per
@@ -499,7 +448,7 @@ impl TexKind {
 /// Renders `cmds` with `textures` (a textured command's `tex` indexes
 /// them) in perspective mode `kind`, timing `runs` renders first like
 /// [`render_timed`]. Textured scenes are built with a 16-bit Z plane, no
-/// window-ID plane, no coverage antialiasing and dither 0 or 4 (other
+/// window-ID plane, no coverage antialiasing and any dither (other
 /// configurations: [`Error::BadSize`]; the tolerance variants
 /// [`TexKind::TOLERANCES`] also need RGB888 or RGB565); with [`TexKind::None`] it is
 /// [`render_timed`], textures unused.
@@ -518,12 +467,20 @@ pub fn render_textured(
     where
         Rgb888: From<F::Color>,
     {
-        type P<F, D, X> =
-            Planes<F, Depth16, NoWid, D, NoAa, FullPrecision, AlphaBlending, QuadraticShading, X>;
-        match cfg.dither {
-            0 | 1 => render_source::<P<F, NoDither, X>, _, SIM_GROUPS>(cfg, src, runs),
-            4 => render_source::<P<F, Bayer4, X>, _, SIM_GROUPS>(cfg, src, runs),
-            _ => Err(Error::BadSize),
+        type P<F, X> = Planes<
+            F,
+            Depth16,
+            NoWid,
+            RuntimeDither,
+            NoAa,
+            FullPrecision,
+            AlphaBlending,
+            QuadraticShading,
+            X,
+        >;
+        match dither_log2(cfg.dither) {
+            Some(_) => render_source::<P<F, X>, _, SIM_GROUPS>(cfg, src, runs),
+            None => Err(Error::BadSize),
         }
     }
     /// RGB888 and RGB565 (all the tolerance knob's variants compile: each
@@ -608,7 +565,7 @@ where
         image,
         raw,
         depth,
-        bits_per_pixel: Tile::<G, C>::bits_per_pixel(),
+        bits_per_pixel: tile.bits_in_use(),
         stats,
         ns_per_pixel: times.get(times.len() / 2).copied(),
     })

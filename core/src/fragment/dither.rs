@@ -15,20 +15,42 @@
 //! threshold, and when they are greater the value is incremented. The
 //! increment **saturates** at the channel maximum.
 
-/// An ordered-dither choice, fixed at compile time: an unused dither costs
-/// no instruction.
-pub trait Dither: 'static {
+/// An ordered-dither choice: [`Bayer<L>`](Bayer), fixed at compile time
+/// (a zero-sized value whose level folds into the loops: an unused dither
+/// costs no instruction), or [`RuntimeDither`], whose level is a value (a
+/// host that reads its configuration from a file compiles one pipeline for
+/// every level). A tile holds its dither as a value
+/// ([`Tile::set_dither`](crate::tile::Tile::set_dither)).
+pub trait Dither: Copy + 'static {
+    /// The value a new tile starts with.
+    const NEW: Self;
+
     /// `log2` of the matrix side: 0 (none), 1 (2x2), 2 (4x4), 3 (8x8), 4 (16x16).
-    const LOG2: u32;
-    /// The threshold at screen address `(x, y)`: [`threshold`]`(LOG2, x, y)`.
+    fn log2(self) -> u32;
+
+    /// The value of this type with matrix side `2^log2`, if it has one
+    /// (a `Bayer<L>` only for `L`).
+    ///
+    /// ```
+    /// use tilerast::dither::{Bayer4, Dither, RuntimeDither};
+    /// assert!(Bayer4::with_log2(2).is_some());
+    /// assert!(Bayer4::with_log2(3).is_none());
+    /// assert_eq!(RuntimeDither::with_log2(3).map(Dither::log2), Some(3));
+    /// ```
+    #[inline]
+    fn with_log2(log2: u32) -> Option<Self> {
+        (Self::NEW.log2() == log2).then_some(Self::NEW)
+    }
+
+    /// The threshold at screen address `(x, y)`: [`threshold`]`(log2, x, y)`.
     ///
     /// ```
     /// use tilerast::dither::{threshold, Bayer8, Dither};
-    /// assert_eq!(Bayer8::threshold(13, 6), threshold(3, 13, 6));
+    /// assert_eq!(Bayer8::NEW.threshold(13, 6), threshold(3, 13, 6));
     /// ```
     #[inline(always)]
-    fn threshold(x: u32, y: u32) -> u32 {
-        ((1 << (2 * Self::LOG2)) - 1) - Self::complement(x, y)
+    fn threshold(self, x: u32, y: u32) -> u32 {
+        ((1 << (2 * self.log2())) - 1) - self.complement(x, y)
     }
 
     /// What quantization adds to a lane at `(x, y)`: the threshold's
@@ -43,30 +65,47 @@ pub trait Dither: 'static {
     ///
     /// ```
     /// use tilerast::dither::{threshold, Bayer8, Dither};
-    /// assert_eq!(Bayer8::carry(13, 6), ((63 - threshold(3, 13, 6)) << 10) as i32);
+    /// assert_eq!(Bayer8::NEW.carry(13, 6), ((63 - threshold(3, 13, 6)) << 10) as i32);
     /// ```
     #[inline(always)]
-    fn carry(x: u32, y: u32) -> i32 {
-        (Self::complement(x, y) << (crate::numeric::COLOR_FRAC - 2 * Self::LOG2)) as i32
+    fn carry(self, x: u32, y: u32) -> i32 {
+        (self.complement(x, y) << (crate::numeric::COLOR_FRAC - 2 * self.log2())) as i32
     }
 
     /// The largest [`Self::carry`], `(4^L - 1) 2^(16 - 2L)` (0 without
-    /// dither): a lane below `2^16 (max + 1) - CARRY_MAX` quantizes
+    /// dither): a lane below `2^16 (max + 1) - carry_max` quantizes
     /// without reaching its clamp at any address.
     ///
     /// ```
     /// use tilerast::dither::{Bayer8, Dither, NoDither};
-    /// assert_eq!(Bayer8::CARRY_MAX, 63 << 10);
-    /// assert_eq!(NoDither::CARRY_MAX, 0);
+    /// assert_eq!(Bayer8::NEW.carry_max(), 63 << 10);
+    /// assert_eq!(NoDither::NEW.carry_max(), 0);
     /// ```
-    const CARRY_MAX: i32 =
-        (((1u32 << (2 * Self::LOG2)) - 1) << (crate::numeric::COLOR_FRAC - 2 * Self::LOG2)) as i32;
+    #[inline(always)]
+    fn carry_max(self) -> i32 {
+        let bits = 2 * self.log2();
+        (((1u32 << bits) - 1) << (crate::numeric::COLOR_FRAC - bits)) as i32
+    }
+
+    /// The bias added once at span start so that truncation in the
+    /// quantizer rounds to nearest: half a unit of the last fraction bit
+    /// it looks at.
+    ///
+    /// ```
+    /// use tilerast::dither::{Bayer4, Dither, NoDither};
+    /// assert_eq!(NoDither::NEW.round_bias(), 1 << 15);
+    /// assert_eq!(Bayer4::NEW.round_bias(), 1 << 11);
+    /// ```
+    #[inline(always)]
+    fn round_bias(self) -> i32 {
+        1 << (crate::numeric::COLOR_FRAC - 2 * self.log2() - 1)
+    }
 
     /// `4^L - 1 - threshold(x, y)`, from the table.
     #[doc(hidden)]
     #[inline(always)]
-    fn complement(x: u32, y: u32) -> u32 {
-        let table = match Self::LOG2 {
+    fn complement(self, x: u32, y: u32) -> u32 {
+        let table = match self.log2() {
             0 => return 0,
             1 => &BAYER_2,
             2 => &BAYER_4,
@@ -100,8 +139,8 @@ static BAYER_4: [[u8; 16]; 16] = bayer_table(2);
 static BAYER_8: [[u8; 16]; 16] = bayer_table(3);
 static BAYER_16: [[u8; 16]; 16] = bayer_table(4);
 
-/// Bayer ordered dither of side `2^L`. `Bayer<0>` is no dither (round to
-/// nearest).
+/// Bayer ordered dither of side `2^L`, fixed by type. `Bayer<0>` is no
+/// dither (round to nearest).
 ///
 /// ```
 /// use tilerast::dither::{threshold, Bayer8};
@@ -111,11 +150,20 @@ static BAYER_16: [[u8; 16]; 16] = bayer_table(4);
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Bayer<const L: u32>;
 
-impl<const L: u32> Dither for Bayer<L> {
-    const LOG2: u32 = {
+impl<const L: u32> Bayer<L> {
+    /// `log2` of the matrix side.
+    pub const LOG2: u32 = {
         assert!(L <= 4, "dither matrices up to 16x16");
         L
     };
+}
+
+impl<const L: u32> Dither for Bayer<L> {
+    const NEW: Self = Bayer;
+    #[inline(always)]
+    fn log2(self) -> u32 {
+        Self::LOG2
+    }
 }
 
 /// No dither: round to nearest.
@@ -126,6 +174,58 @@ pub type Bayer2 = Bayer<1>;
 pub type Bayer4 = Bayer<2>;
 /// 8x8 ordered dither (the seed's REjr).
 pub type Bayer8 = Bayer<3>;
+
+/// An ordered dither whose matrix side is a value, `2^log2` (0 to 4; 0 is
+/// none): what the host simulator uses, so that one compiled pipeline
+/// serves every level a scene file may ask for. Its pixels equal
+/// [`Bayer<L>`](Bayer)'s at the same level (tested); it costs a table
+/// pointer and a shift by a register where `Bayer` folds constants.
+/// Firmware names its dither by type.
+///
+/// ```
+/// use tilerast::dither::{Bayer8, Dither, RuntimeDither};
+/// let d = RuntimeDither::new(3)?;
+/// assert_eq!(d.carry(13, 6), Bayer8::NEW.carry(13, 6));
+/// assert!(RuntimeDither::new(5).is_err());
+/// # Ok::<(), tilerast::Error>(())
+/// ```
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct RuntimeDither {
+    log2: u8,
+}
+
+impl RuntimeDither {
+    /// The dither of side `2^log2`; [`Error::BadSize`](crate::Error::BadSize)
+    /// above 4 (16 x 16).
+    pub const fn new(log2: u32) -> Result<Self, crate::Error> {
+        if log2 > 4 {
+            return Err(crate::Error::BadSize);
+        }
+        Ok(RuntimeDither { log2: log2 as u8 })
+    }
+}
+
+/// [`RUNTIME_TABLES`]' entry for no dither: every complement 0.
+static BAYER_1: [[u8; 16]; 16] = [[0; 16]; 16];
+
+/// The complement tables by level, for [`RuntimeDither`].
+static RUNTIME_TABLES: [&[[u8; 16]; 16]; 5] = [&BAYER_1, &BAYER_2, &BAYER_4, &BAYER_8, &BAYER_16];
+
+impl Dither for RuntimeDither {
+    const NEW: Self = RuntimeDither { log2: 0 };
+    #[inline]
+    fn with_log2(log2: u32) -> Option<Self> {
+        Self::new(log2).ok()
+    }
+    #[inline(always)]
+    fn log2(self) -> u32 {
+        self.log2 as u32
+    }
+    #[inline(always)]
+    fn complement(self, x: u32, y: u32) -> u32 {
+        RUNTIME_TABLES[(self.log2 as usize).min(4)][(y & 15) as usize][(x & 15) as usize] as u32
+    }
+}
 
 /// The threshold `D(x, y)` in `0..4^L` of the `2^L x 2^L` Bayer matrix at screen
 /// address `(x, y)`, from the address bits alone (seed eq. 2 generalised).
@@ -187,9 +287,14 @@ mod tests {
             for y in (0..40).chain(u32::MAX - 40..=u32::MAX) {
                 for x in (0..40).chain(u32::MAX - 40..=u32::MAX) {
                     let t = threshold(L, x, y);
-                    assert_eq!(Bayer::<L>::threshold(x, y), t, "L={L} {x} {y}");
+                    assert_eq!(Bayer::<L>::NEW.threshold(x, y), t, "L={L} {x} {y}");
                     let c = ((1 << (2 * L)) - 1 - t) << (16 - 2 * L);
-                    assert_eq!(Bayer::<L>::carry(x, y), c as i32, "L={L} {x} {y}");
+                    assert_eq!(Bayer::<L>::NEW.carry(x, y), c as i32, "L={L} {x} {y}");
+                    let r = RuntimeDither::new(L).unwrap();
+                    assert_eq!(r.threshold(x, y), t, "L={L} {x} {y}");
+                    assert_eq!(r.carry(x, y), c as i32, "L={L} {x} {y}");
+                    assert_eq!(r.carry_max(), Bayer::<L>::NEW.carry_max());
+                    assert_eq!(r.round_bias(), Bayer::<L>::NEW.round_bias());
                 }
             }
         }
@@ -221,7 +326,7 @@ mod tests {
     #[test]
     fn quantize_equals_compare_and_increment() {
         fn check<D: Dither>() {
-            let bits = 2 * D::LOG2;
+            let bits = 2 * D::NEW.log2();
             let values = (-70_000..70_000)
                 .step_by(7)
                 .chain((0..1 << 13).map(|k| (15 << 16) - 40 + k * 127))
@@ -245,7 +350,7 @@ mod tests {
                     let inc = if bits == 0 { 0 } else { (frac > t) as i32 };
                     for max in [15, 31, 255] {
                         assert_eq!(
-                            quantize::<D>(v, max, t),
+                            quantize(D::NEW, v, max, t),
                             (int + inc).clamp(0, max),
                             "{v} {t} {max}"
                         );
@@ -264,19 +369,19 @@ mod tests {
         // 15 + fraction 63/64 at any threshold must stay 15 (4-bit channel).
         let v = (15 << 16) | (63 << 10);
         for t in 0..64 {
-            assert_eq!(quantize::<Bayer8>(v, 15, t), 15);
+            assert_eq!(quantize(Bayer8::NEW, v, 15, t), 15);
         }
         // Just below max: value 14 + 63/64 becomes 15 for all but the top threshold.
         let v = (14 << 16) | (63 << 10);
         assert_eq!(
             (0..64)
-                .filter(|&t| quantize::<Bayer8>(v, 15, t) == 15)
+                .filter(|&t| quantize(Bayer8::NEW, v, 15, t) == 15)
                 .count(),
             63
         );
         // Negative drift clamps to zero.
-        assert_eq!(quantize::<Bayer8>(-5, 15, 0), 0);
-        assert_eq!(quantize::<NoDither>(-5, 15, 0), 0);
+        assert_eq!(quantize(Bayer8::NEW, -5, 15, 0), 0);
+        assert_eq!(quantize(NoDither::NEW, -5, 15, 0), 0);
     }
 
     #[test]
@@ -286,7 +391,7 @@ mod tests {
             let v = (3 << 16) | (f << 10);
             let sum: i32 = (0..8)
                 .flat_map(|y| (0..8).map(move |x| (x, y)))
-                .map(|(x, y)| quantize::<Bayer8>(v, 15, threshold(3, x, y)))
+                .map(|(x, y)| quantize(Bayer8::NEW, v, 15, threshold(3, x, y)))
                 .sum();
             assert_eq!(sum, 3 * 64 + f);
         }
@@ -301,7 +406,7 @@ mod quant {
     use super::*;
 
     /// Quantizes one lane (output scale, [`COLOR_FRAC`](crate::numeric::COLOR_FRAC)
-    /// fraction bits, already carrying the `+0.5` bias of [`round_bias`]) to an
+    /// fraction bits, already carrying the `+0.5` bias of [`Dither::round_bias`]) to an
     /// integer in `0..=max`, dithered with threshold `t`: the integer part,
     /// plus one when the top `2 LOG2` fraction bits exceed `t` (seed
     /// Fig. 2), clamped.
@@ -317,8 +422,8 @@ mod quant {
     /// increments.
     #[cfg_attr(not(feature = "unstable"), allow(dead_code))]
     #[inline(always)]
-    pub fn quantize<D: Dither>(v: i32, max: i32, t: u32) -> i32 {
-        let bits = 2 * D::LOG2;
+    pub fn quantize<D: Dither>(d: D, v: i32, max: i32, t: u32) -> i32 {
+        let bits = 2 * d.log2();
         let complement = ((1u32 << bits) - 1).saturating_sub(t);
         quantize_carry(
             v,
@@ -332,17 +437,11 @@ mod quant {
     pub fn quantize_carry(v: i32, max: i32, carry: i32) -> i32 {
         (v.saturating_add(carry) >> crate::numeric::COLOR_FRAC).clamp(0, max)
     }
-
-    /// The bias added once at span start so that truncation in [`quantize`]
-    /// rounds to nearest: half a unit of the last fraction bit it looks at.
-    pub const fn round_bias<D: Dither>() -> i32 {
-        1 << (crate::numeric::COLOR_FRAC - 2 * D::LOG2 - 1)
-    }
 }
 
 #[cfg(all(test, not(feature = "unstable")))]
 use quant::quantize;
-#[cfg(feature = "unstable")]
-pub use quant::{quantize, quantize_carry, round_bias};
 #[cfg(not(feature = "unstable"))]
-pub(crate) use quant::{quantize_carry, round_bias};
+pub(crate) use quant::quantize_carry;
+#[cfg(feature = "unstable")]
+pub use quant::{quantize, quantize_carry};

@@ -62,6 +62,40 @@ pub struct Wid8;
 #[derive(Debug, Clone, Copy, Default)]
 pub struct NoWid;
 
+/// A plane whose presence is a value: `Switchable<Depth16>` or
+/// `Switchable<Wid8>` stores the plane of `M` always and stores and tests
+/// through it only while switched on
+/// ([`Tile::enable_depth`](crate::tile::Tile::enable_depth),
+/// [`Tile::enable_wid`](crate::tile::Tile::enable_wid); on when new).
+/// Switched off, a tile draws exactly what the same tile without the plane
+/// draws (tested). For a host that reads its configuration from a file: one
+/// compiled pipeline serves both, at the cost of the plane's RAM and a
+/// branch a pixel. Firmware names its planes by type.
+///
+/// ```
+/// use tilerast::prelude::*;
+/// type Host = Planes<Rgb565Format, Switchable<Depth16>, Switchable<Wid8>>;
+/// let mut tile: Tile<8, Host> = Tile::new();
+/// tile.enable_depth(false);
+/// tile.begin(Rect::new(0, 0, 8, 8), &Clear { depth: 7, ..Clear::default() })?;
+/// assert_eq!(tile.depth(0, 0), Some(0xFFFF)); // as without a depth plane
+/// tile.enable_depth(true);
+/// tile.begin(Rect::new(0, 0, 8, 8), &Clear { depth: 7, ..Clear::default() })?;
+/// assert_eq!(tile.depth(0, 0), Some(7));
+/// # Ok::<(), Error>(())
+/// ```
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Switchable<M>(PhantomData<M>);
+
+impl<M: DepthMode> DepthMode for Switchable<M> {
+    type Plane<const N: usize> = Switch<M::Plane<N>>;
+    const BITS: u32 = M::BITS;
+}
+impl<M: WidMode> WidMode for Switchable<M> {
+    type Plane<const N: usize> = Switch<M::Plane<N>>;
+    const BITS: u32 = M::BITS;
+}
+
 impl<T: Cell + 'static, const FRAC: u32> DepthMode for DepthBits<T, FRAC> {
     type Plane<const N: usize> = ZPlane<T, FRAC, N>;
     const BITS: u32 = 8 * core::mem::size_of::<T>() as u32;
@@ -150,6 +184,15 @@ mod planes {
     pub trait DepthPlane: Sized {
         /// A new plane (contents are set by the tile's clear).
         const NEW: Self;
+        /// Whether the plane stores and tests (a constant unless the
+        /// plane is [`Switchable`]).
+        #[inline(always)]
+        fn present(&self) -> bool {
+            true
+        }
+        /// Switches a [`Switchable`] plane on or off; others ignore it.
+        #[inline(always)]
+        fn set_present(&mut self, _on: bool) {}
         /// Sets pixel `i` to the integer depth `z` (clears, Z fills, resolved
         /// coverage).
         fn put(&mut self, i: usize, z: u16);
@@ -181,6 +224,15 @@ mod planes {
     pub trait WidPlane: Sized {
         /// A new plane.
         const NEW: Self;
+        /// Whether the plane stores and tests (a constant unless the
+        /// plane is [`Switchable`]).
+        #[inline(always)]
+        fn present(&self) -> bool {
+            true
+        }
+        /// Switches a [`Switchable`] plane on or off; others ignore it.
+        #[inline(always)]
+        fn set_present(&mut self, _on: bool) {}
         /// Sets pixel `i` to `id`.
         fn put(&mut self, i: usize, id: u8);
         /// Sets every pixel of `r` to `id` (a window's rows): a slice fill
@@ -296,6 +348,10 @@ mod planes {
     impl DepthPlane for () {
         const NEW: Self = ();
         #[inline(always)]
+        fn present(&self) -> bool {
+            false
+        }
+        #[inline(always)]
         fn put(&mut self, _: usize, _: u16) {}
         #[inline(always)]
         fn read(&self, _: usize) -> u16 {
@@ -344,6 +400,10 @@ mod planes {
     impl WidPlane for () {
         const NEW: Self = ();
         #[inline(always)]
+        fn present(&self) -> bool {
+            false
+        }
+        #[inline(always)]
         fn put(&mut self, _: usize, _: u8) {}
         #[inline(always)]
         fn read(&self, _: usize) -> u8 {
@@ -354,12 +414,113 @@ mod planes {
             true
         }
     }
+
+    /// Storage of a [`Switchable`] plane: plane `P` and whether it is on;
+    /// off, every method answers as the absent plane `()` does.
+    pub struct Switch<P> {
+        on: bool,
+        plane: P,
+    }
+
+    impl<P: DepthPlane> DepthPlane for Switch<P> {
+        const NEW: Self = Switch {
+            on: true,
+            plane: <P as DepthPlane>::NEW,
+        };
+        #[inline(always)]
+        fn present(&self) -> bool {
+            self.on
+        }
+        #[inline(always)]
+        fn set_present(&mut self, on: bool) {
+            self.on = on;
+        }
+        #[inline(always)]
+        fn put(&mut self, i: usize, z: u16) {
+            if self.on {
+                DepthPlane::put(&mut self.plane, i, z);
+            }
+        }
+        #[inline(always)]
+        fn read(&self, i: usize) -> u16 {
+            if self.on {
+                DepthPlane::read(&self.plane, i)
+            } else {
+                DepthPlane::read(&(), i)
+            }
+        }
+        #[inline(always)]
+        fn test_and_set(&mut self, i: usize, z: i32) -> bool {
+            !self.on || self.plane.test_and_set(i, z)
+        }
+        #[inline(always)]
+        fn test_and_set_in_range(&mut self, i: usize, z: i32) -> bool {
+            !self.on || self.plane.test_and_set_in_range(i, z)
+        }
+        #[inline(always)]
+        fn test(&self, i: usize, z: i32) -> bool {
+            !self.on || self.plane.test(i, z)
+        }
+        fn farther(&self, r: core::ops::Range<usize>, z: u16, limit: u32) -> u32 {
+            if self.on {
+                self.plane.farther(r, z, limit)
+            } else {
+                ().farther(r, z, limit)
+            }
+        }
+        fn farther_min_max(&self, r: core::ops::Range<usize>, z: u16) -> (u32, u16, u16) {
+            if self.on {
+                self.plane.farther_min_max(r, z)
+            } else {
+                ().farther_min_max(r, z)
+            }
+        }
+    }
+
+    impl<P: WidPlane> WidPlane for Switch<P> {
+        const NEW: Self = Switch {
+            on: true,
+            plane: <P as WidPlane>::NEW,
+        };
+        #[inline(always)]
+        fn present(&self) -> bool {
+            self.on
+        }
+        #[inline(always)]
+        fn set_present(&mut self, on: bool) {
+            self.on = on;
+        }
+        #[inline(always)]
+        fn put(&mut self, i: usize, id: u8) {
+            if self.on {
+                WidPlane::put(&mut self.plane, i, id);
+            }
+        }
+        #[inline(always)]
+        fn put_range(&mut self, r: core::ops::Range<usize>, id: u8) {
+            if self.on {
+                self.plane.put_range(r, id);
+            }
+        }
+        #[inline(always)]
+        fn read(&self, i: usize) -> u8 {
+            if self.on {
+                WidPlane::read(&self.plane, i)
+            } else {
+                WidPlane::read(&(), i)
+            }
+        }
+        #[inline(always)]
+        fn pass(&self, i: usize, id: u8) -> bool {
+            !self.on || self.plane.pass(i, id)
+        }
+    }
 }
 
 #[cfg(feature = "unstable")]
-pub use planes::{DepthPlane, WidPlane, ZPlane};
+pub use planes::{DepthPlane, Switch, WidPlane, ZPlane};
 #[cfg(not(feature = "unstable"))]
-pub(crate) use planes::{DepthPlane, WidPlane, ZPlane};
+pub(crate) use planes::{DepthPlane, Switch, WidPlane, ZPlane};
 
 #[cfg(test)]
 mod tests {

@@ -291,6 +291,22 @@ impl core::fmt::Display for DrawError {
 
 impl core::error::Error for DrawError {}
 
+/// `?` in a helper that renders: a refused draw is the raster core's error.
+///
+/// ```
+/// use tilerast::prelude::*;
+/// use tilerast::geometry::DrawError;
+/// fn frame() -> Result<(), FlushError<()>> {
+///     Err(DrawError::Degenerate)?
+/// }
+/// assert_eq!(frame(), Err(FlushError::Raster(Error::Degenerate)));
+/// ```
+impl<E> From<DrawError> for crate::error::FlushError<E> {
+    fn from(e: DrawError) -> Self {
+        crate::error::FlushError::Raster(e.into())
+    }
+}
+
 impl From<DrawError> for Error {
     fn from(e: DrawError) -> Self {
         match e {

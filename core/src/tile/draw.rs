@@ -14,7 +14,7 @@ use crate::command::{Blend, Command, QuadVertex, SpanCmd, State};
 use crate::config::{CommandSet, TileConfig};
 use crate::error::Error;
 use crate::format::{ColorPlane, Lanes, PixelFormat, Rgb};
-use crate::fragment::dither::{round_bias, Dither};
+use crate::fragment::dither::Dither;
 use crate::fragment::{BlendMode, DepthMode, DepthPlane, ShadingMode, WidMode, WidPlane};
 use crate::geom::cell_bounds;
 use crate::geom::{MeshVertex, Rect, SubBox};
@@ -57,8 +57,12 @@ where
     X: TextureMode,
 {
     /// Whether a span of one colour is a slice fill: no plane to test
-    /// (Z, window ID) and no dither to vary it by address.
-    const SLICE_FILLS: bool = Z::BITS == 0 && W::BITS == 0 && D::LOG2 == 0;
+    /// (Z, window ID) and no dither to vary it by address (a constant
+    /// where the planes and dither are fixed by type).
+    #[inline(always)]
+    fn slice_fills(&self) -> bool {
+        !self.depth.present() && !self.wid.present() && self.dither.log2() == 0
+    }
 
     /// Validates and draws one command, clipped to the tile (a textured
     /// triangle without its texture: [`Self::draw_textured`]).
@@ -340,7 +344,7 @@ where
         let ga = t.p.alpha[1];
         let zwrite = !BLEND || st.blend == Blend::AlphaZWrite;
         let mask = st.plane_mask & F::MASK_ALL;
-        let bias = round_bias::<D>();
+        let bias = self.dither.round_bias();
         let starts = RowStarts::new::<P, T>(t);
         let area = self.area;
         let mut sp = TexSpan::default();
@@ -511,7 +515,7 @@ where
         t.p = t.planes::<F>(v, BLEND);
         let starts = RowStarts::new::<P, T>(t);
         if !QUAD
-            && Self::SLICE_FILLS
+            && self.slice_fills()
             && v[0].color == v[1].color
             && v[1].color == v[2].color
             && st.plane_mask & F::MASK_ALL == F::MASK_ALL
@@ -522,7 +526,7 @@ where
             // row (host, 1,077-px flat triangles: 0.47 -> 0.36 ns/px with
             // the fill and traversal as they are now, measured).
             let (s, _) = starts.at::<P, false, T>(t, &first);
-            let c = Self::pack_at(0, 0, s.c.map(|c| c + round_bias::<D>()));
+            let c = self.pack_at(0, 0, s.c.map(|c| c + self.dither.round_bias()));
             for row in core::iter::once(first).chain(rows) {
                 let idx = self.offset(row.x0, row.py);
                 let end = idx + (row.x1 - row.x0) as usize;
@@ -674,11 +678,11 @@ where
     /// the tile it covers any sample of ([`crate::raster::coverage::fragments`]).
     fn triangle_aa(&mut self, v: &[crate::command::Vertex; 3], st: &State) {
         let a = self.area;
+        let ztest = self.depth.present();
         crate::raster::coverage::fragments::<A::Pattern>(v, &a, |px, py, m, color, z| {
             let i = self.offset(px, py);
             if self.wid.pass(i, st.wid) {
-                self.aa
-                    .fragment(i, m, |k| z.at(k), Z::BITS > 0, color, st.tag);
+                self.aa.fragment(i, m, |k| z.at(k), ztest, color, st.tag);
             }
         });
     }
@@ -784,7 +788,7 @@ where
         }
         let mask = st.plane_mask & F::MASK_ALL;
         let old = F::unpack_masked(self.color.get(idx), mask);
-        let v = mix(c, old, w, round_bias::<D>(), false);
+        let v = mix(c, old, w, self.dither.round_bias(), false);
         self.store::<true>(idx, x as u32, y as u32, v, mask);
     }
 
@@ -871,10 +875,10 @@ where
         wid: u8,
         mask: u32,
     ) {
-        let bias = round_bias::<D>();
+        let bias = self.dither.round_bias();
         let (mut c, mut dc, z) = (s.c, s.dc, s.z);
         let end = idx + n;
-        if Self::scaled_blend::<MODE>() {
+        if Self::scaled_blend::<MODE>(self.dither) {
             c = c.map(|v| v.wrapping_add(bias).wrapping_shl(8));
             dc = dc.map(|v| v.wrapping_shl(8));
         }
@@ -886,18 +890,24 @@ where
         }
         if MODE == OPAQUE
             && !MASKED
-            && Self::SLICE_FILLS
+            && self.slice_fills()
             && (0..F::Lanes::LEN).all(|i| dc.lane(i) == 0)
         {
             // A flat span with nothing to test or dither: one colour,
             // stored as a slice fill (flat-shaded triangles and span
             // commands; host: see `reports/frames.md`).
-            self.color.fill(idx..end, Self::pack_at(x, y, c));
+            let c = self.pack_at(x, y, c);
+            self.color.fill(idx..end, c);
             return;
         }
         let st = SpanState { c, dc, ddc, z, a };
         let steps = (s.dz, da);
-        if CLAMP_FREE_SPANS && MODE == OPAQUE && !MASKED && n > 2 && Self::in_range(&st, s.dz, n) {
+        if CLAMP_FREE_SPANS
+            && MODE == OPAQUE
+            && !MASKED
+            && n > 2
+            && Self::in_range(self.dither, &st, s.dz, n)
+        {
             // Every value in range: the loop without its clamps (the
             // micro:bit's large Gouraud + Z workload 77.0 -> 60.3
             // instructions a pixel, the per-span test included: measured).
@@ -915,10 +925,10 @@ where
     /// Quadratic colour may overshoot its vertices, so it keeps the plain
     /// form, whose 32-bit products hold values 2^8 times larger.
     #[inline(always)]
-    fn scaled_blend<const MODE: u8>() -> bool {
+    fn scaled_blend<const MODE: u8>(d: D) -> bool {
         MODE & !QUAD_STEP != OPAQUE
             && MODE & QUAD_STEP == 0
-            && round_bias::<D>() >= 1 << 8
+            && d.round_bias() >= 1 << 8
             && (0..F::Lanes::LEN).all(|i| F::MAX.lane(i) < 128)
     }
 
@@ -927,7 +937,7 @@ where
     /// ([`Self::lane_limit`], depth in `0..2^30`): the steps are bounded
     /// and both ends in range ([`ends_in`]).
     #[inline(always)]
-    fn in_range(st: &SpanState<F::Lanes>, dz: i32, n: usize) -> bool {
+    fn in_range(dither: D, st: &SpanState<F::Lanes>, dz: i32, n: usize) -> bool {
         let n = u32::try_from(n).unwrap_or(u32::MAX);
         let mut m = if Z::BITS > 0 { ones_abs(dz) } else { 0 };
         let mut ends = Z::BITS == 0 || ends_in(st.z, dz, n, 1 << 30);
@@ -937,7 +947,7 @@ where
         F::Lanes::from_fn(|i| {
             let (v, d) = (st.c.lane(i), st.dc.lane(i));
             m |= ones_abs(d);
-            ends &= ends_in(v, d, n, Self::lane_limit(i));
+            ends &= ends_in(v, d, n, Self::lane_limit(dither, i));
             0
         });
         ends && steps_bounded(m, n)
@@ -967,8 +977,8 @@ where
         mask: u32,
     ) {
         let blend = MODE & !QUAD_STEP;
-        let bias = round_bias::<D>();
-        let scaled = Self::scaled_blend::<MODE>();
+        let bias = self.dither.round_bias();
+        let scaled = Self::scaled_blend::<MODE>(self.dither);
         for idx in range {
             let pass = self.wid.pass(idx, wid)
                 && match blend {
@@ -1091,7 +1101,7 @@ where
         st: &State,
     ) {
         let idx = self.offset(x, y);
-        let bias = round_bias::<D>();
+        let bias = self.dither.round_bias();
         let s = SpanStart {
             c: s.c.map(|v| v + bias),
             z: s.z + (1 << (Z_FRAC - 1)),
@@ -1368,6 +1378,7 @@ mod tests {
             };
             let lanes: [(i32, i32); 3] = core::array::from_fn(|i| {
                 pick(Tile::<32, C>::lane_limit(
+                    <C::Dither as Dither>::NEW,
                     i.min(<C::Format as PixelFormat>::Lanes::LEN - 1),
                 ))
             });
@@ -1381,7 +1392,7 @@ mod tests {
                 z,
                 a: 0,
             };
-            if Tile::<32, C>::in_range(&st(), dz, n) {
+            if Tile::<32, C>::in_range(<C::Dither as Dither>::NEW, &st(), dz, n) {
                 fast += 1;
             } else {
                 slow += 1;

@@ -13,8 +13,8 @@ use crate::command::State;
 use crate::config::TileConfig;
 use crate::error::Error;
 use crate::format::{ColorPlane, Lanes, PixelFormat, Rgb};
+use crate::fragment::dither::quantize_carry;
 use crate::fragment::dither::Dither;
-use crate::fragment::dither::{quantize_carry, round_bias};
 use crate::fragment::{DepthMode, DepthPlane, WidMode, WidPlane};
 use crate::geom::Rect;
 use crate::numeric::{Precision, COLOR_FRAC, Z_FRAC};
@@ -96,6 +96,9 @@ pub struct Tile<const N: usize, C: TileConfig> {
     pub(crate) depth: <C::Depth as DepthMode>::Plane<N>,
     pub(crate) wid: <C::Wid as WidMode>::Plane<N>,
     pub(crate) aa: <C::Aa as AaMode>::Plane<N>,
+    /// The dither, a value ([`Tile::set_dither`]; zero-sized when fixed by
+    /// type).
+    pub(crate) dither: C::Dither,
     pub(crate) area: Rect,
     /// Coverage resolved into the colour plane ([`Tile::finish`]).
     resolved: bool,
@@ -149,6 +152,7 @@ where
             depth: <Z::Plane<N> as DepthPlane>::NEW,
             wid: <W::Plane<N> as WidPlane>::NEW,
             aa: <A::Plane<N> as AaPlane>::NEW,
+            dither: D::NEW,
             area: Rect::new(0, 0, 0, 0),
             resolved: false,
             refused: false,
@@ -174,6 +178,59 @@ where
             + core::mem::size_of::<Z::Plane<N>>()
             + core::mem::size_of::<W::Plane<N>>()
             + core::mem::size_of::<A::Plane<N>>()
+    }
+
+    /// The tile's dither (zero-sized when the configuration fixes it by
+    /// type).
+    pub fn dither(&self) -> D {
+        self.dither
+    }
+
+    /// Sets the dither used from the next store on: what a
+    /// [`RuntimeDither`](crate::dither::RuntimeDither) is for (a
+    /// `Bayer<L>` has one value).
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// let mut tile: Tile<8, Planes<Rgb565Format, NoDepth, NoWid, RuntimeDither>> = Tile::new();
+    /// tile.set_dither(RuntimeDither::new(2)?); // 4x4, as Bayer4
+    /// assert_eq!(tile.dither().log2(), 2);
+    /// # Ok::<(), Error>(())
+    /// ```
+    pub fn set_dither(&mut self, d: D) {
+        self.dither = d;
+    }
+
+    /// Switches a [`Switchable`](crate::fragment::Switchable) depth plane
+    /// on or off, from the next [`Tile::begin`] on (a plane fixed by type
+    /// ignores it).
+    pub fn enable_depth(&mut self, on: bool) {
+        self.depth.set_present(on);
+    }
+
+    /// Switches a [`Switchable`](crate::fragment::Switchable) window-ID
+    /// plane on or off, from the next [`Tile::begin`] on (a plane fixed by
+    /// type ignores it).
+    pub fn enable_wid(&mut self, on: bool) {
+        self.wid.set_present(on);
+    }
+
+    /// Bits per pixel of the planes in use: [`Tile::bits_per_pixel`] less
+    /// a [`Switchable`](crate::fragment::Switchable) plane switched off —
+    /// what the same tile with that plane left out by type would take.
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// let mut tile: Tile<8, Planes<Rgb565Format, Switchable<Depth16>>> = Tile::new();
+    /// assert_eq!(tile.bits_in_use(), 32);
+    /// tile.enable_depth(false);
+    /// assert_eq!(tile.bits_in_use(), Tile::<8, Rgb565Format>::bits_per_pixel());
+    /// ```
+    pub fn bits_in_use(&self) -> u32 {
+        let off = |present: bool, bits: u32| if present { 0 } else { bits };
+        Self::bits_per_pixel()
+            - off(self.depth.present(), Z::BITS)
+            - off(self.wid.present(), W::BITS)
     }
 
     /// The screen rectangle the tile currently holds.
@@ -232,7 +289,7 @@ where
             return false;
         }
         let a = self.area;
-        let bias = round_bias::<D>();
+        let bias = self.dither.round_bias();
         for i in 0..a.area() as usize {
             // Covered samples plus the background (the colour plane: the
             // clear colour or a fill) on the uncovered ones, in the output
@@ -256,14 +313,14 @@ where
     /// scale with [`COLOR_FRAC`] fraction bits, rounding bias included.
     #[inline(always)]
     fn store<const MASKED: bool>(&mut self, i: usize, x: u32, y: u32, v: F::Lanes, mask: u32) {
-        self.put_packed::<MASKED>(i, Self::pack_at(x, y, v), mask);
+        self.put_packed::<MASKED>(i, self.pack_at(x, y, v), mask);
     }
 
     /// `v` (as in [`Self::store`]) dithered at screen `(x, y)`, quantized
     /// and packed.
     #[inline(always)]
-    fn pack_at(x: u32, y: u32, v: F::Lanes) -> u32 {
-        let carry = D::carry(x, y);
+    fn pack_at(&self, x: u32, y: u32, v: F::Lanes) -> u32 {
+        let carry = self.dither.carry(x, y);
         F::pack(v.zip(F::MAX, |v, max| quantize_carry(v, max, carry)))
     }
 
@@ -279,7 +336,7 @@ where
         v: F::Lanes,
         mask: u32,
     ) {
-        let carry = D::carry(x, y);
+        let carry = self.dither.carry(x, y);
         let q = v.map(|v| (v as u32 + carry as u32) as i32 >> COLOR_FRAC);
         self.put_packed::<MASKED>(i, F::pack(q), mask);
     }
@@ -289,9 +346,9 @@ where
     /// dither's largest carry (at most 2^30, what
     /// [`ends_in`](crate::numeric::ends_in) takes).
     #[inline(always)]
-    fn lane_limit(i: usize) -> u32 {
+    fn lane_limit(d: D, i: usize) -> u32 {
         let top = ((F::MAX.lane(i) as u64 + 1) << COLOR_FRAC).min(1 << 30);
-        top as u32 - D::CARRY_MAX as u32
+        top as u32 - d.carry_max() as u32
     }
 
     /// Composites a premultiplied colour `lanes` (output scale,
@@ -301,7 +358,7 @@ where
     #[inline]
     pub(crate) fn over(&mut self, i: usize, x: u32, y: u32, lanes: F::Lanes, keep: i32) {
         let old = F::unpack(self.color.get(i));
-        let bias = round_bias::<D>();
+        let bias = self.dither.round_bias();
         let v = lanes.zip(old, |p, o| {
             p + ((o as i64 * keep as i64) >> 15) as i32 + bias
         });
