@@ -20,6 +20,7 @@ pub mod render;
 /// The deterministic PRNG, shared with the firmware workloads.
 pub use tilerast_fw::rng;
 pub mod scene;
+pub mod silhouette;
 pub mod texscene;
 pub mod volume;
 

@@ -1,4 +1,4 @@
-//! Textured meshes (seed 001 §IV.3 in the simulator): where a mesh's
+//! Textured meshes: where a mesh's
 //! texture comes from (the scene's `texture = "…png"` or the `.mtl`'s
 //! `map_Kd`), its texture coordinates (the OBJ's `vt`, or a spherical or
 //! cylindrical projection for models that have none), and how a lit

@@ -1,6 +1,9 @@
-//! Renders a display list with the `no_std` core, choosing the tile's types
-//! (format, depth plane, window-ID plane, dither) from a runtime [`TileConfig`]:
-//! the host pays the monomorphization, the firmware picks one.
+//! Renders a display list with the `no_std` core, in the tiles a scene
+//! file asks for. A firmware names its tile's planes by type; the
+//! simulator reads them from a file, so it compiles one pipeline per colour
+//! format, coverage mode and depth plane, and sets the window-ID plane and
+//! the dither as values (`Switchable<Wid8>`, `RuntimeDither`): the same
+//! pixels, a handful of pipelines instead of hundreds.
 
 use embedded_graphics_core::pixelcolor::Rgb888;
 use tilerast::coverage::AaMode;
@@ -161,7 +164,7 @@ pub enum AaKind {
     /// Supersampling, regular 8x8 grid (the paper's reference).
     Grid8,
     /// Area sampling through the α-channel (the RE's, [`tilerast::area`]):
-    /// silhouette and boundary edges ([`crate::mesh::flag_silhouettes`])
+    /// silhouette and boundary edges ([`crate::silhouette::flag_silhouettes`])
     /// blended by exact pixel coverage; no plane.
     Area,
 }
@@ -259,13 +262,13 @@ pub fn render_timed(cfg: &Config, cmds: &[Command], runs: usize) -> Result<Rende
                     v.iter_mut().for_each(|v| v.edge_flag = false);
                 }
             }
-            by_format::<tilerast::area::AreaAa, HostDepth, SIM_GROUPS>(cfg, &plain, runs)
+            without_coverage(cfg, &plain, runs)
         }
-        AaKind::None => by_format::<tilerast::area::AreaAa, HostDepth, SIM_GROUPS>(cfg, cmds, runs),
+        AaKind::None => without_coverage(cfg, cmds, runs),
         AaKind::Area => {
             let mut flagged = cmds.to_vec();
-            crate::mesh::flag_silhouettes(&mut flagged);
-            by_format::<tilerast::area::AreaAa, HostDepth, SIM_GROUPS>(cfg, &flagged, runs)
+            crate::silhouette::flag_silhouettes(&mut flagged);
+            without_coverage(cfg, &flagged, runs)
         }
         AaKind::Ruf4 => aa_format::<Ruf4>(cfg, cmds, runs),
         AaKind::Ruf8 => aa_format::<Ruf8>(cfg, cmds, runs),
@@ -278,12 +281,24 @@ pub fn render_timed(cfg: &Config, cmds: &[Command], runs: usize) -> Result<Rende
     }
 }
 
-/// The depth plane of the simulator's tiles: present or not as the scene
-/// says, one compiled pipeline for both (pixels equal a tile without the
-/// plane when it is off: tested in the core).
-pub type HostDepth = Switchable<Depth16>;
-/// The window-ID plane of the simulator's tiles ([`HostDepth`]'s kind).
+/// The window-ID plane of the simulator's tiles: present or not as the
+/// scene says, one compiled pipeline for both (pixels equal a tile without
+/// the plane when it is off: `tests/tests/runtime_planes.rs`).
 pub type HostWid = Switchable<Wid8>;
+
+/// [`by_format`] without a coverage plane (`AreaAa`: area sampling has no
+/// plane, and a triangle without edge flags draws exactly as without it).
+/// The depth plane stays a type here: as a value it cost every pixel a
+/// test of the switch and the loops' registers, about 12% of a frame
+/// (criterion, the teapot), for 5 pipelines more.
+fn without_coverage(cfg: &Config, cmds: &[Command], runs: usize) -> Result<Rendered, Error> {
+    use tilerast::area::AreaAa;
+    if cfg.depth {
+        by_format::<AreaAa, Depth16, SIM_GROUPS>(cfg, cmds, runs)
+    } else {
+        by_format::<AreaAa, NoDepth, SIM_GROUPS>(cfg, cmds, runs)
+    }
+}
 
 /// `log2` of a dither matrix side as a scene names it (0 or 1: none, 2,
 /// 4, 8, 16); `None` for any other.
@@ -295,8 +310,8 @@ pub fn dither_log2(side: u8) -> Option<u32> {
     }
 }
 
-/// The simulator's pipelines: one per colour format and coverage mode —
-/// depth, window ID and dither are values ([`HostDepth`], [`HostWid`],
+/// The simulator's pipelines: one per colour format, coverage mode and
+/// depth plane — window ID and dither are values ([`HostWid`],
 /// [`RuntimeDither`]), not types, so the build compiles a handful of
 /// pipelines rather than one per combination (a cold release build went
 /// from 11.6 min and 9.5 GB of memory to about 2 min and 2 GB: the README's

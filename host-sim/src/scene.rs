@@ -367,12 +367,6 @@ pub struct Scene {
     warnings: Vec<String>,
 }
 
-/// The next object tag (wrapping past 65535 back to 1).
-pub(crate) fn next_tag(tags: &mut u16) -> u16 {
-    *tags = tags.checked_add(1).unwrap_or(1);
-    *tags
-}
-
 /// Line numbers of byte offsets, in `O(log lines)` each (finding them by
 /// counting newlines from the start made parsing quadratic).
 struct Lines<'a> {
@@ -656,7 +650,7 @@ impl Scene {
                     }
                     // Each triangle of the file is an object of its own.
                     let st = State {
-                        tag: next_tag(&mut tags),
+                        tag: mesh::next_tag(&mut tags),
                         blend: blend_of(*blend, alpha.is_some()),
                         ..state(*window, *plane_mask)
                     };
@@ -841,7 +835,7 @@ impl Scene {
                 let span = v.span();
                 let spec = v.get_ref().clone();
                 Some(
-                    crate::volume::VolumeScene::load(spec, base)
+                    crate::volume::VolumeScene::load(spec, base, limits)
                         .map_err(|e| invalid(lines.of(span.start), format!("[volume] {e}")))?,
                 )
             }

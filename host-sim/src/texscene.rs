@@ -1,4 +1,4 @@
-//! The perspective-texturing workload (seed 001 §IV.3), shared by the
+//! The perspective-texturing workload, shared by the
 //! tests, the trade-off report and the firmware: a textured rectangle seen
 //! at an angle, so that its far edge is `ratio` times as deep as its near
 //! one, mapped with a *ramp* texture whose texels encode their own

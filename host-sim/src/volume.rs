@@ -44,6 +44,37 @@ pub const MAX_SLICES: usize = 1024;
 /// 256^3 is 64 MB of densities and normals, the seed's largest.
 pub const MAX_MADE_SIDE: u16 = 256;
 
+/// Fills `buf` from `r`; on an error, the bytes read before it.
+fn read_all(
+    r: &mut impl std::io::Read,
+    buf: &mut [u8],
+) -> std::result::Result<(), (std::io::Error, usize)> {
+    let mut got = 0;
+    while got < buf.len() {
+        match r.read(&mut buf[got..]) {
+            Ok(0) => return Err((std::io::ErrorKind::UnexpectedEof.into(), got)),
+            Ok(k) => got += k,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err((e, got)),
+        }
+    }
+    Ok(())
+}
+
+/// A number as a person reads it: `1e300`, not 300 digits.
+struct Readable(f64);
+
+impl std::fmt::Display for Readable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let v = self.0;
+        if v.is_finite() && v.abs() >= 1e7 {
+            write!(f, "{v:e}")
+        } else {
+            write!(f, "{v}")
+        }
+    }
+}
+
 fn made_side(n: u16) -> Result<()> {
     if (2..=MAX_MADE_SIDE).contains(&n) {
         Ok(())
@@ -90,25 +121,107 @@ impl VolumeData {
 
     /// A NIfTI-1 file (`.nii` or `.nii.gz`): 8-bit data as it is, other
     /// types rescaled from their range to `0..=255`; spacing from `pixdim`.
+    /// At most the default [`Limits::max_bytes`](crate::Limits) of
+    /// (decompressed) data: [`VolumeData::load_nifti_within`].
     pub fn load_nifti(path: &Path) -> Result<Self> {
-        use nifti::{NiftiObject, RandomAccessNiftiVolume, ReaderOptions};
+        Self::load_nifti_within(path, crate::Limits::default().max_bytes)
+    }
+
+    /// [`VolumeData::load_nifti`] reading at most `max_bytes` of data.
+    /// The header is read first and what it declares — dimensions, voxel
+    /// type, data offset — is checked before anything else is read: a
+    /// 1 MB gzip bomb that declares 1024³ voxels is refused from its
+    /// header, and the decompressed stream is cut at the declared size,
+    /// so no file makes the loader read or allocate more than that.
+    /// Errors are sentences naming the file ("the data ends early: 40 of
+    /// 512 bytes").
+    pub fn load_nifti_within(path: &Path, max_bytes: u64) -> Result<Self> {
+        use nifti::{InMemNiftiObject, NiftiHeader, NiftiObject, RandomAccessNiftiVolume};
+        use std::io::Read;
         let bad = |m: String| Error::Unsupported(format!("{}: {m}", path.display()));
-        let obj = ReaderOptions::new()
-            .read_file(path)
-            .map_err(|e| bad(e.to_string()))?;
-        let h = obj.header().clone();
-        if h.dim[0] < 3
-            || h.dim[1..4]
-                .iter()
-                .any(|d| !(2..=tilerast::volume::MAX_VOLUME_SIDE).contains(d))
+        let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+        let mut file = std::io::BufReader::new(file);
+        let gz = {
+            use std::io::BufRead;
+            let head = file.fill_buf().map_err(|e| Error::io(path, e))?;
+            head.starts_with(&[0x1f, 0x8b])
+        };
+        let mut src: Box<dyn Read> = if gz {
+            Box::new(flate2::bufread::GzDecoder::new(file))
+        } else {
+            Box::new(file)
+        };
+        let what = if gz { "the gzip stream" } else { "the file" };
+        let read_err = |e: std::io::Error, got: usize, want: u64| -> Error {
+            match e.kind() {
+                std::io::ErrorKind::UnexpectedEof => {
+                    bad(format!("{what} ends early: {got} of {want} bytes"))
+                }
+                std::io::ErrorKind::InvalidInput | std::io::ErrorKind::InvalidData => {
+                    bad(format!("{what} is corrupt after {got} bytes: {e}"))
+                }
+                _ => Error::io(path, e),
+            }
+        };
+        // The header: 348 bytes, then 4 of extension flags.
+        let mut head = vec![0u8; 352];
+        read_all(&mut src, &mut head).map_err(|(e, got)| read_err(e, got, 352))?;
+        let h = NiftiHeader::from_reader(&head[..])
+            .map_err(|e| bad(format!("not a NIfTI-1 header: {e}")))?;
+        if h.dim[0] < 3 || h.dim[0] > 7 {
+            return Err(bad(format!(
+                "{} dimensions: a volume has 3 (dim[0] = {})",
+                h.dim[0], h.dim[0]
+            )));
+        }
+        let side = 2..=tilerast::volume::MAX_VOLUME_SIDE;
+        if let Some((axis, &d)) = h.dim[1..4]
+            .iter()
+            .enumerate()
+            .find(|(_, d)| !side.contains(*d))
         {
             return Err(bad(format!(
-                "dimensions {:?} are not a 3D volume of 2..=1024 a side",
-                &h.dim[..4]
+                "side {axis} is {} voxels: each side must be 2..={}",
+                d as i16,
+                tilerast::volume::MAX_VOLUME_SIDE
+            )));
+        }
+        if let Some(&extra) = h.dim[4..=h.dim[0] as usize].iter().find(|&&d| d != 1) {
+            return Err(bad(format!(
+                "a 4D series ({} volumes): one 3D volume is read",
+                extra as i16
             )));
         }
         let dims = [h.dim[1], h.dim[2], h.dim[3]];
-        let n = dims.iter().map(|&d| d as usize).product::<usize>();
+        let n = dims.iter().map(|&d| d as u64).product::<u64>();
+        let bytes_per = match h.bitpix {
+            8 | 16 | 32 | 64 => h.bitpix as u64 / 8,
+            b => return Err(bad(format!("{b} bits a voxel: 8, 16, 32 or 64 are read"))),
+        };
+        let off = h.vox_offset;
+        if !off.is_finite() || !(352.0..=16.0 * 1024.0 * 1024.0).contains(&off) {
+            return Err(bad(format!(
+                "the data offset (vox_offset) is {}: it must be 352..=16 MiB",
+                Readable(off as f64)
+            )));
+        }
+        let total = off as u64 + n * bytes_per;
+        if total > max_bytes {
+            return Err(bad(format!(
+                "{}x{}x{} voxels of {bytes_per} bytes ({} bytes) exceed the limit of {max_bytes} bytes",
+                dims[0], dims[1], dims[2], total
+            )));
+        }
+        let mut all = head;
+        all.resize(total as usize, 0);
+        read_all(&mut src, &mut all[352..]).map_err(|(e, got)| read_err(e, 352 + got, total))?;
+        for (name, v) in [("scl_slope", h.scl_slope), ("scl_inter", h.scl_inter)] {
+            if !v.is_finite() {
+                return Err(bad(format!("{name} is {v}: it must be finite")));
+            }
+        }
+        let obj = InMemNiftiObject::from_reader(&all[..]).map_err(|e| bad(e.to_string()))?;
+        let n = n as usize;
         let vol = obj.into_volume();
         let plain =
             h.datatype == 2 && (h.scl_slope == 0.0 || h.scl_slope == 1.0) && h.scl_inter == 0.0;
@@ -125,6 +238,12 @@ impl VolumeData {
                     }
                 }
             }
+            let bad_voxels = v.iter().filter(|x| !x.is_finite()).count();
+            if bad_voxels > 0 {
+                return Err(bad(format!(
+                    "{bad_voxels} of {n} voxels are NaN or infinite"
+                )));
+            }
             let (lo, hi) = v
                 .iter()
                 .fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
@@ -134,7 +253,10 @@ impl VolumeData {
                 .collect()
         };
         if density.len() != n {
-            return Err(bad("fewer voxels than its dimensions".into()));
+            return Err(bad(format!(
+                "{} voxels where its dimensions declare {n}",
+                density.len()
+            )));
         }
         let spacing = [1, 2, 3].map(|i| {
             let s = h.pixdim[i].abs() as f64;
@@ -144,11 +266,43 @@ impl VolumeData {
         Self::with_normals(density, dims, spacing)
     }
 
-    /// Raw 8-bit densities of `dims`, `x` fastest, unit spacing.
+    /// Raw 8-bit densities of `dims`, `x` fastest, unit spacing. Reads
+    /// exactly the `w h d` bytes the dimensions declare (a longer file's
+    /// rest is ignored; `/dev/zero` gives a black volume), at most the
+    /// default [`Limits::max_bytes`](crate::Limits): see
+    /// [`VolumeData::load_raw_within`].
     pub fn load_raw(path: &Path, dims: [u16; 3]) -> Result<Self> {
-        let d = std::fs::read(path).map_err(|source| Error::Io {
-            path: path.into(),
-            source,
+        Self::load_raw_within(path, dims, crate::Limits::default().max_bytes)
+    }
+
+    /// [`VolumeData::load_raw`] of at most `max_bytes`, checked before the
+    /// file is read.
+    pub fn load_raw_within(path: &Path, dims: [u16; 3], max_bytes: u64) -> Result<Self> {
+        let bad = |m: String| Error::Unsupported(format!("{}: {m}", path.display()));
+        let side = 2..=tilerast::volume::MAX_VOLUME_SIDE;
+        if let Some(d) = dims.iter().find(|d| !side.contains(*d)) {
+            return Err(bad(format!(
+                "dims side {d}: each side must be 2..={}",
+                tilerast::volume::MAX_VOLUME_SIDE
+            )));
+        }
+        let n = dims.iter().map(|&d| d as u64).product::<u64>();
+        if n > max_bytes {
+            return Err(bad(format!(
+                "dims {}x{}x{} declare {n} bytes, over the limit of {max_bytes}",
+                dims[0], dims[1], dims[2]
+            )));
+        }
+        let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+        let mut d = vec![0u8; n as usize];
+        read_all(&mut std::io::BufReader::new(file), &mut d).map_err(|(e, got)| {
+            if e.kind() == std::io::ErrorKind::UnexpectedEof {
+                bad(format!(
+                    "the file ends early: {got} of the {n} bytes dims declare"
+                ))
+            } else {
+                Error::io(path, e)
+            }
         })?;
         Volume::new(&d, dims)?;
         Self::with_normals(d, dims, [256; 3])
@@ -331,9 +485,13 @@ pub struct VolumeScene {
 }
 
 impl VolumeScene {
-    /// Loads the data a spec names (files relative to `base`) and checks
-    /// the rest.
-    pub fn load(spec: VolumeSpec, base: &Path) -> std::result::Result<Self, String> {
+    /// Loads the data a spec names (files relative to `base`, each at most
+    /// `limits.max_bytes` of data) and checks the rest.
+    pub fn load(
+        spec: VolumeSpec,
+        base: &Path,
+        limits: &crate::Limits,
+    ) -> std::result::Result<Self, String> {
         let e = |e: Error| e.to_string();
         if spec.slices == 0 || spec.slices as usize > MAX_SLICES {
             return Err(format!("slices = {} must be 1..={MAX_SLICES}", spec.slices));
@@ -345,9 +503,9 @@ impl VolumeScene {
             let name = spec.source.to_ascii_lowercase();
             let d = if name.ends_with(".raw") {
                 let dims = spec.dims.ok_or("a .raw volume needs dims = [w, h, d]")?;
-                VolumeData::load_raw(&path, dims).map_err(e)?
+                VolumeData::load_raw_within(&path, dims, limits.max_bytes).map_err(e)?
             } else if name.ends_with(".nii") || name.ends_with(".nii.gz") {
-                VolumeData::load_nifti(&path).map_err(e)?
+                VolumeData::load_nifti_within(&path, limits.max_bytes).map_err(e)?
             } else {
                 return Err(format!(
                     "source {:?}: expected \"sphere\", .nii, .nii.gz or .raw",

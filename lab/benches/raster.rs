@@ -258,5 +258,46 @@ fn raster(c: &mut Criterion) {
     bench_tile::<Rgb565Format, NoDepth, Wid8, NoDither>(c, "fill", "flat_wid_rgb565", &fills, fpx);
 }
 
-criterion_group!(benches, raster, large, filled);
+/// The simulator's frames, its planes and dither values
+/// ([`tilerast_sim::render`]: `Switchable` depth and window ID,
+/// `RuntimeDither`) against the same frame with them fixed by type (the
+/// simulator's pipelines before they were values), per screen pixel: what
+/// the simulator's fast build costs in speed.
+fn sim(c: &mut Criterion) {
+    use tilerast::area::AreaAa;
+    use tilerast_sim::render::{render_as, SIM_GROUPS};
+    let scene = |name: &str| {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../scenes")
+            .join(name);
+        tilerast_sim::Scene::load(&path).expect("scene loads")
+    };
+    let mut g = c.benchmark_group("sim");
+    macro_rules! pair {
+        ($($file:literal, $name:literal, $f:ty, $z:ty, $w:ty, $d:ty;)*) => {$({
+            let s = scene($file);
+            let cfg = s.config;
+            g.throughput(Throughput::Elements(cfg.width as u64 * cfg.height as u64));
+            let fixed = render_as::<$f, $z, $w, $d, AreaAa, FullPrecision, SIM_GROUPS>(&cfg, &s.commands, 0).unwrap();
+            assert_eq!(tilerast_sim::render(&cfg, &s.commands).unwrap().raw, fixed.raw, $file);
+            g.bench_function(BenchmarkId::from_parameter(concat!($name, "_values")), |b| {
+                b.iter(|| tilerast_sim::render(&cfg, black_box(&s.commands)).unwrap())
+            });
+            g.bench_function(BenchmarkId::from_parameter(concat!($name, "_types")), |b| {
+                b.iter(|| {
+                    render_as::<$f, $z, $w, $d, AreaAa, FullPrecision, SIM_GROUPS>(&cfg, black_box(&s.commands), 0)
+                        .unwrap()
+                })
+            });
+        })*};
+    }
+    pair! {
+        "demo.toml", "demo_rgb444_z_wid_dither8", Rgb444Format, Depth16, Wid8, Bayer8;
+        "ssd1306.toml", "ssd1306_1bit_z_dither4", BinaryFormat, Depth16, NoWid, Bayer4;
+        "teapot.toml", "teapot_rgb565_z", Rgb565Format, Depth16, NoWid, NoDither;
+    }
+    g.finish();
+}
+
+criterion_group!(benches, raster, large, filled, sim);
 criterion_main!(benches);

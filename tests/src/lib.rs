@@ -329,3 +329,9 @@ where
         .unwrap();
     (out, stats)
 }
+
+/// The front page's Rust blocks (`README.md`), compiled by `cargo test
+/// --doc -p tilerast-tests`: its getting-started cannot rot.
+#[cfg(doctest)]
+#[doc = include_str!("../../README.md")]
+pub struct ReadmeDoctests;

@@ -47,16 +47,17 @@ fn files(root: &Path, dir: &Path, out: &mut Vec<(String, String)>) {
     }
 }
 
-/// The module graph of `core/src` (edges between distinct top-level
-/// modules; `lib.rs` only declares and re-exports).
-fn graph() -> BTreeMap<String, BTreeSet<String>> {
-    let root = tilerast_tests::repo().join("core/src");
+/// The module graph of crate source folder `src` (edges between distinct
+/// top-level modules; `lib.rs` only declares and re-exports, `main.rs` is
+/// the binary on top).
+fn graph(src: &str) -> BTreeMap<String, BTreeSet<String>> {
+    let root = tilerast_tests::repo().join(src);
     let mut all = Vec::new();
     files(&root, &root, &mut all);
     let modules: BTreeSet<String> = all.iter().map(|(m, _)| m.clone()).collect();
     let mut g: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
     for (m, src) in &all {
-        if m == "lib" {
+        if m == "lib" || m == "main" {
             continue;
         }
         let deps = g.entry(m.clone()).or_default();
@@ -105,7 +106,7 @@ fn cycle(g: &BTreeMap<String, BTreeSet<String>>) -> Option<Vec<String>> {
 
 #[test]
 fn core_stages_import_without_a_cycle() {
-    let g = graph();
+    let g = graph("core/src");
     assert!(g.len() >= 12, "{g:?}");
     assert_eq!(
         cycle(&g),
@@ -117,6 +118,20 @@ fn core_stages_import_without_a_cycle() {
     assert!(g["frame"].contains("tile") && !g["tile"].contains("frame"));
     assert!(g["tile"].contains("raster") && !g["raster"].contains("tile"));
     assert!(!g["raster"].contains("fragment") && !g["fragment"].contains("raster"));
+}
+
+/// The simulator's modules too: scenes read files and build commands,
+/// the renderers draw them, the reports sit on top — no module imports
+/// one that imports it back.
+#[test]
+fn simulator_modules_import_without_a_cycle() {
+    let g = graph("host-sim/src");
+    assert!(g.len() >= 10, "{g:?}");
+    assert_eq!(
+        cycle(&g),
+        None,
+        "import cycle in the simulator; graph {g:#?}"
+    );
 }
 
 #[test]
@@ -144,6 +159,13 @@ fn the_cycle_finder_finds_cycles() {
 fn readme_stays_a_readable_page() {
     let text = std::fs::read_to_string(tilerast_tests::repo().join("README.md")).unwrap();
     assert!(text.len() < 200_000, "README.md is {} bytes", text.len());
+    // A front page: what it is, two commands, getting started, what is
+    // proven, links. Long material lives in docs/ and reports/.
+    let lines = text.lines().count();
+    assert!(
+        lines <= 300,
+        "README.md is {lines} lines: move material to docs/"
+    );
     assert!(
         text.starts_with("# tilerast\n"),
         "README.md starts with its title"
@@ -158,4 +180,93 @@ fn readme_stays_a_readable_page() {
     {
         assert!(seen.insert(line), "README.md repeats: {line}");
     }
+}
+
+/// Every Markdown file of the repository (README, CHANGELOG, docs/,
+/// reports/, the crates' pages): relative links point at files that exist,
+/// and `#anchors` at headings of the file they name.
+#[test]
+fn every_markdown_link_resolves() {
+    let root = tilerast_tests::repo();
+    let mut pages = vec![];
+    fn walk(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
+        for e in std::fs::read_dir(dir).unwrap().flatten() {
+            let p = e.path();
+            let name = e.file_name().to_string_lossy().into_owned();
+            if p.is_dir() {
+                if !name.starts_with('.') && name != "target" && name != "corpus" && name != "seeds"
+                {
+                    walk(&p, out);
+                }
+            } else if name.ends_with(".md") {
+                out.push(p);
+            }
+        }
+    }
+    walk(&root, &mut pages);
+    assert!(pages.len() > 10, "found {} pages", pages.len());
+    let anchors = |text: &str| -> BTreeSet<String> {
+        text.lines()
+            .filter(|l| l.starts_with('#'))
+            .map(|l| {
+                l.trim_start_matches('#')
+                    .trim()
+                    .to_lowercase()
+                    .chars()
+                    .filter_map(|c| match c {
+                        ' ' => Some('-'),
+                        c if c.is_alphanumeric() || c == '-' || c == '_' => Some(c),
+                        _ => None,
+                    })
+                    .collect()
+            })
+            .collect()
+    };
+    let mut broken = vec![];
+    for page in &pages {
+        let text = std::fs::read_to_string(page).unwrap();
+        let mut in_code = false;
+        for line in text.lines() {
+            if line.trim_start().starts_with("```") {
+                in_code = !in_code;
+                continue;
+            }
+            if in_code {
+                continue;
+            }
+            let mut rest = line;
+            while let Some(i) = rest.find("](") {
+                rest = &rest[i + 2..];
+                let Some(end) = rest.find(')') else { break };
+                let target = rest[..end].trim_matches(['<', '>']);
+                rest = &rest[end..];
+                // Web links, and rustdoc's intra-doc paths (`tile::Tile`) in
+                // pages a crate includes as its documentation, which
+                // `cargo doc -D warnings` checks.
+                if target.is_empty()
+                    || target.contains("://")
+                    || target.starts_with("mailto:")
+                    || target.contains(' ')
+                    || target.contains("::")
+                {
+                    continue;
+                }
+                let (file, anchor) = target.split_once('#').unwrap_or((target, ""));
+                let dest = if file.is_empty() {
+                    page.clone()
+                } else {
+                    page.parent().unwrap().join(file)
+                };
+                if !dest.exists() {
+                    broken.push(format!("{}: {target} (no such file)", page.display()));
+                } else if !anchor.is_empty() && dest.extension().is_some_and(|e| e == "md") {
+                    let t = std::fs::read_to_string(&dest).unwrap();
+                    if !anchors(&t).contains(anchor) {
+                        broken.push(format!("{}: {target} (no such heading)", page.display()));
+                    }
+                }
+            }
+        }
+    }
+    assert!(broken.is_empty(), "broken links:\n{}", broken.join("\n"));
 }

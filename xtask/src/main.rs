@@ -312,6 +312,24 @@ fn test() -> Result<(), String> {
     if passed == 0 {
         return Err("no test ran".into());
     }
+    // The host examples run as a user runs them (`cargo run --example`).
+    std::fs::create_dir_all("target/tmp").map_err(|e| e.to_string())?;
+    for ex in ["spin", "overlay", "gauge"] {
+        let out = format!("target/tmp/{ex}.png");
+        run(
+            "cargo",
+            &[
+                "run",
+                "-q",
+                "-p",
+                "tilerast-examples",
+                "--example",
+                ex,
+                "--",
+                &out,
+            ],
+        )?;
+    }
     // The firmware test exported the scenes the QEMU boards embed: lint them too.
     let scenes = std::fs::canonicalize("target/tmp/scenes")
         .map_err(|e| format!("target/tmp/scenes: {e}"))?;

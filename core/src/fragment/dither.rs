@@ -25,6 +25,11 @@ pub trait Dither: Copy + 'static {
     /// The value a new tile starts with.
     const NEW: Self;
 
+    /// Whether the level is a value that varies at run time
+    /// ([`RuntimeDither`]): the span loop then takes `NoDither`'s path at
+    /// level 0. `false` for a dither fixed by type.
+    const VARIES: bool = false;
+
     /// `log2` of the matrix side: 0 (none), 1 (2x2), 2 (4x4), 3 (8x8), 4 (16x16).
     fn log2(self) -> u32;
 
@@ -205,14 +210,32 @@ impl RuntimeDither {
     }
 }
 
-/// [`RUNTIME_TABLES`]' entry for no dither: every complement 0.
-static BAYER_1: [[u8; 16]; 16] = [[0; 16]; 16];
-
-/// The complement tables by level, for [`RuntimeDither`].
-static RUNTIME_TABLES: [&[[u8; 16]; 16]; 5] = [&BAYER_1, &BAYER_2, &BAYER_4, &BAYER_8, &BAYER_16];
+/// [`RuntimeDither`]'s carries by level, already shifted into place
+/// (`4^L - 1 - t` at bit `16 - 2L`; level 0 all zero): a pixel's carry is
+/// one load, where the complement tables would cost a shift by a register
+/// too (5 KB, linked only by a program that uses `RuntimeDither`).
+static RUNTIME_CARRIES: [[[i32; 16]; 16]; 5] = {
+    let mut t = [[[0; 16]; 16]; 5];
+    let mut l = 1;
+    while l < 5 {
+        let c = bayer_table(l as u32);
+        let mut y = 0;
+        while y < 16 {
+            let mut x = 0;
+            while x < 16 {
+                t[l][y][x] = (c[y][x] as i32) << (crate::numeric::COLOR_FRAC - 2 * l as u32);
+                x += 1;
+            }
+            y += 1;
+        }
+        l += 1;
+    }
+    t
+};
 
 impl Dither for RuntimeDither {
     const NEW: Self = RuntimeDither { log2: 0 };
+    const VARIES: bool = true;
     #[inline]
     fn with_log2(log2: u32) -> Option<Self> {
         Self::new(log2).ok()
@@ -222,8 +245,8 @@ impl Dither for RuntimeDither {
         self.log2 as u32
     }
     #[inline(always)]
-    fn complement(self, x: u32, y: u32) -> u32 {
-        RUNTIME_TABLES[(self.log2 as usize).min(4)][(y & 15) as usize][(x & 15) as usize] as u32
+    fn carry(self, x: u32, y: u32) -> i32 {
+        RUNTIME_CARRIES[(self.log2 as usize).min(4)][(y & 15) as usize][(x & 15) as usize]
     }
 }
 

@@ -415,35 +415,37 @@ mod planes {
         }
     }
 
-    /// Storage of a [`Switchable`] plane: plane `P` and whether it is on;
-    /// off, every method answers as the absent plane `()` does.
+    /// Storage of a [`Switchable`] plane: plane `P` and whether it is
+    /// off; off, every method answers as the absent plane `()` does. (The
+    /// flag says *off* so that a new plane is all zero bits: a boxed tile
+    /// is then zeroed in place, not built on the stack and copied.)
     pub struct Switch<P> {
-        on: bool,
+        off: bool,
         plane: P,
     }
 
     impl<P: DepthPlane> DepthPlane for Switch<P> {
         const NEW: Self = Switch {
-            on: true,
+            off: false,
             plane: <P as DepthPlane>::NEW,
         };
         #[inline(always)]
         fn present(&self) -> bool {
-            self.on
+            !self.off
         }
         #[inline(always)]
         fn set_present(&mut self, on: bool) {
-            self.on = on;
+            self.off = !on;
         }
         #[inline(always)]
         fn put(&mut self, i: usize, z: u16) {
-            if self.on {
+            if !self.off {
                 DepthPlane::put(&mut self.plane, i, z);
             }
         }
         #[inline(always)]
         fn read(&self, i: usize) -> u16 {
-            if self.on {
+            if !self.off {
                 DepthPlane::read(&self.plane, i)
             } else {
                 DepthPlane::read(&(), i)
@@ -451,25 +453,25 @@ mod planes {
         }
         #[inline(always)]
         fn test_and_set(&mut self, i: usize, z: i32) -> bool {
-            !self.on || self.plane.test_and_set(i, z)
+            self.off || self.plane.test_and_set(i, z)
         }
         #[inline(always)]
         fn test_and_set_in_range(&mut self, i: usize, z: i32) -> bool {
-            !self.on || self.plane.test_and_set_in_range(i, z)
+            self.off || self.plane.test_and_set_in_range(i, z)
         }
         #[inline(always)]
         fn test(&self, i: usize, z: i32) -> bool {
-            !self.on || self.plane.test(i, z)
+            self.off || self.plane.test(i, z)
         }
         fn farther(&self, r: core::ops::Range<usize>, z: u16, limit: u32) -> u32 {
-            if self.on {
+            if !self.off {
                 self.plane.farther(r, z, limit)
             } else {
                 ().farther(r, z, limit)
             }
         }
         fn farther_min_max(&self, r: core::ops::Range<usize>, z: u16) -> (u32, u16, u16) {
-            if self.on {
+            if !self.off {
                 self.plane.farther_min_max(r, z)
             } else {
                 ().farther_min_max(r, z)
@@ -479,32 +481,32 @@ mod planes {
 
     impl<P: WidPlane> WidPlane for Switch<P> {
         const NEW: Self = Switch {
-            on: true,
+            off: false,
             plane: <P as WidPlane>::NEW,
         };
         #[inline(always)]
         fn present(&self) -> bool {
-            self.on
+            !self.off
         }
         #[inline(always)]
         fn set_present(&mut self, on: bool) {
-            self.on = on;
+            self.off = !on;
         }
         #[inline(always)]
         fn put(&mut self, i: usize, id: u8) {
-            if self.on {
+            if !self.off {
                 WidPlane::put(&mut self.plane, i, id);
             }
         }
         #[inline(always)]
         fn put_range(&mut self, r: core::ops::Range<usize>, id: u8) {
-            if self.on {
+            if !self.off {
                 self.plane.put_range(r, id);
             }
         }
         #[inline(always)]
         fn read(&self, i: usize) -> u8 {
-            if self.on {
+            if !self.off {
                 WidPlane::read(&self.plane, i)
             } else {
                 WidPlane::read(&(), i)
@@ -512,7 +514,7 @@ mod planes {
         }
         #[inline(always)]
         fn pass(&self, i: usize, id: u8) -> bool {
-            !self.on || self.plane.pass(i, id)
+            self.off || self.plane.pass(i, id)
         }
     }
 }

@@ -112,7 +112,7 @@ pub struct Group {
 /// assert!(Mesh::parse(&buf[..n - 1]).is_err());
 /// # Ok::<(), tilerast::Error>(())
 /// ```
-#[derive(Debug, Clone, Copy)]
+#[derive(Clone, Copy)]
 pub struct Mesh<'a> {
     bytes: &'a [u8],
     nv: u16,
@@ -307,6 +307,26 @@ impl<'a> Mesh<'a> {
             ],
             None => [0; 3],
         }
+    }
+}
+
+impl core::fmt::Debug for Mesh<'_> {
+    /// The counts, not the kilobytes of the mesh.
+    ///
+    /// ```
+    /// use tilerast::geometry::{Mesh, CUBE_BYTES};
+    /// let mut buf = [0u8; CUBE_BYTES];
+    /// let cube = Mesh::cube(&mut buf)?;
+    /// assert_eq!(format!("{cube:?}"), format!("Mesh {{ vertices: 24, triangles: 12, groups: 1, bytes: {CUBE_BYTES}, .. }}"));
+    /// # Ok::<(), tilerast::Error>(())
+    /// ```
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Mesh")
+            .field("vertices", &self.nv)
+            .field("triangles", &self.nt)
+            .field("groups", &self.ng)
+            .field("bytes", &self.bytes.len())
+            .finish_non_exhaustive()
     }
 }
 

@@ -14,7 +14,7 @@ use crate::command::{Blend, Command, QuadVertex, SpanCmd, State};
 use crate::config::{CommandSet, TileConfig};
 use crate::error::Error;
 use crate::format::{ColorPlane, Lanes, PixelFormat, Rgb};
-use crate::fragment::dither::Dither;
+use crate::fragment::dither::{Dither, NoDither};
 use crate::fragment::{BlendMode, DepthMode, DepthPlane, ShadingMode, WidMode, WidPlane};
 use crate::geom::cell_bounds;
 use crate::geom::{MeshVertex, Rect, SubBox};
@@ -344,7 +344,8 @@ where
         let ga = t.p.alpha[1];
         let zwrite = !BLEND || st.blend == Blend::AlphaZWrite;
         let mask = st.plane_mask & F::MASK_ALL;
-        let bias = self.dither.round_bias();
+        let d = self.dither;
+        let bias = d.round_bias();
         let starts = RowStarts::new::<P, T>(t);
         let area = self.area;
         let mut sp = TexSpan::default();
@@ -393,9 +394,9 @@ where
                             src.map(|v| v + bias)
                         };
                         if mask == F::MASK_ALL {
-                            tile.store::<false>(idx, x, row.py as u32, out, mask);
+                            tile.store::<false, _>(d, idx, x, row.py as u32, out, mask);
                         } else {
-                            tile.store::<true>(idx, x, row.py as u32, out, mask);
+                            tile.store::<true, _>(d, idx, x, row.py as u32, out, mask);
                         }
                     }
                     texmap::step::<MODE>(&mut px);
@@ -526,7 +527,7 @@ where
             // row (host, 1,077-px flat triangles: 0.47 -> 0.36 ns/px with
             // the fill and traversal as they are now, measured).
             let (s, _) = starts.at::<P, false, T>(t, &first);
-            let c = self.pack_at(0, 0, s.c.map(|c| c + self.dither.round_bias()));
+            let c = Self::pack_at(self.dither, 0, 0, s.c.map(|c| c + self.dither.round_bias()));
             for row in core::iter::once(first).chain(rows) {
                 let idx = self.offset(row.x0, row.py);
                 let end = idx + (row.x1 - row.x0) as usize;
@@ -789,7 +790,7 @@ where
         let mask = st.plane_mask & F::MASK_ALL;
         let old = F::unpack_masked(self.color.get(idx), mask);
         let v = mix(c, old, w, self.dither.round_bias(), false);
-        self.store::<true>(idx, x as u32, y as u32, v, mask);
+        self.store::<true, _>(self.dither, idx, x as u32, y as u32, v, mask);
     }
 
     /// Draws `n >= 1` translucent pixels from screen `(x, y)` (clipped by
@@ -878,7 +879,7 @@ where
         let bias = self.dither.round_bias();
         let (mut c, mut dc, z) = (s.c, s.dc, s.z);
         let end = idx + n;
-        if Self::scaled_blend::<MODE>(self.dither) {
+        if Self::scaled_blend::<MODE, D>(self.dither) {
             c = c.map(|v| v.wrapping_add(bias).wrapping_shl(8));
             dc = dc.map(|v| v.wrapping_shl(8));
         }
@@ -896,7 +897,7 @@ where
             // A flat span with nothing to test or dither: one colour,
             // stored as a slice fill (flat-shaded triangles and span
             // commands; host: see `reports/frames.md`).
-            let c = self.pack_at(x, y, c);
+            let c = Self::pack_at(self.dither, x, y, c);
             self.color.fill(idx..end, c);
             return;
         }
@@ -906,7 +907,7 @@ where
             && MODE == OPAQUE
             && !MASKED
             && n > 2
-            && Self::in_range(self.dither, &st, s.dz, n)
+            && Self::in_range(self.dither, self.depth.present(), &st, s.dz, n)
         {
             // Every value in range: the loop without its clamps (the
             // micro:bit's large Gouraud + Z workload 77.0 -> 60.3
@@ -925,7 +926,7 @@ where
     /// Quadratic colour may overshoot its vertices, so it keeps the plain
     /// form, whose 32-bit products hold values 2^8 times larger.
     #[inline(always)]
-    fn scaled_blend<const MODE: u8>(d: D) -> bool {
+    fn scaled_blend<const MODE: u8, Dd: Dither>(d: Dd) -> bool {
         MODE & !QUAD_STEP != OPAQUE
             && MODE & QUAD_STEP == 0
             && d.round_bias() >= 1 << 8
@@ -937,10 +938,10 @@ where
     /// ([`Self::lane_limit`], depth in `0..2^30`): the steps are bounded
     /// and both ends in range ([`ends_in`]).
     #[inline(always)]
-    fn in_range(dither: D, st: &SpanState<F::Lanes>, dz: i32, n: usize) -> bool {
+    fn in_range(dither: D, depth: bool, st: &SpanState<F::Lanes>, dz: i32, n: usize) -> bool {
         let n = u32::try_from(n).unwrap_or(u32::MAX);
-        let mut m = if Z::BITS > 0 { ones_abs(dz) } else { 0 };
-        let mut ends = Z::BITS == 0 || ends_in(st.z, dz, n, 1 << 30);
+        let mut m = if depth { ones_abs(dz) } else { 0 };
+        let mut ends = !depth || ends_in(st.z, dz, n, 1 << 30);
         // Through `from_fn`, unrolled by hand: at `opt-level = "s"` (the
         // micro:bit) a loop over the lanes stays a loop, each lane's
         // limit computed in it (measured).
@@ -963,6 +964,42 @@ where
     fn span_pixels<const MODE: u8, const MASKED: bool, const CLAMP: bool>(
         &mut self,
         range: Range<usize>,
+        x: u32,
+        y: u32,
+        st: SpanState<F::Lanes>,
+        steps: (i32, i32),
+        wid: u8,
+        mask: u32,
+    ) {
+        // A dither chosen at run time ([`Dither::VARIES`]) at level 0 takes
+        // the loop of `NoDither` (the same numbers: no carry, the same
+        // rounding), whose stores add nothing: the simulator's undithered
+        // scenes cost what they did when the dither was a type.
+        if D::VARIES && self.dither.log2() == 0 {
+            self.span_pixels_with::<MODE, MASKED, CLAMP, NoDither>(
+                NoDither::NEW,
+                range,
+                x,
+                y,
+                st,
+                steps,
+                wid,
+                mask,
+            );
+        } else {
+            let d = self.dither;
+            self.span_pixels_with::<MODE, MASKED, CLAMP, D>(d, range, x, y, st, steps, wid, mask);
+        }
+    }
+
+    /// [`Self::span_pixels`] with dither `d` (the tile's, read once: a
+    /// value the stores cannot change).
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn span_pixels_with<const MODE: u8, const MASKED: bool, const CLAMP: bool, Dd: Dither>(
+        &mut self,
+        d: Dd,
+        range: Range<usize>,
         mut x: u32,
         y: u32,
         SpanState {
@@ -977,8 +1014,8 @@ where
         mask: u32,
     ) {
         let blend = MODE & !QUAD_STEP;
-        let bias = self.dither.round_bias();
-        let scaled = Self::scaled_blend::<MODE>(self.dither);
+        let bias = d.round_bias();
+        let scaled = Self::scaled_blend::<MODE, Dd>(d);
         for idx in range {
             let pass = self.wid.pass(idx, wid)
                 && match blend {
@@ -1000,9 +1037,9 @@ where
                     mix(c, old, a >> 16, bias, scaled)
                 };
                 if CLAMP {
-                    self.store::<MASKED>(idx, x, y, v, mask);
+                    self.store::<MASKED, _>(d, idx, x, y, v, mask);
                 } else {
-                    self.store_in_range::<MASKED>(idx, x, y, v, mask);
+                    self.store_in_range::<MASKED, _>(d, idx, x, y, v, mask);
                 }
             }
             x = x.wrapping_add(1);
@@ -1046,7 +1083,7 @@ where
     }
 
     fn fill_packed<const MASKED: bool>(&mut self, rect: &Rect, c: u32, mask: u32, wid: u8) {
-        if !MASKED && W::BITS == 0 {
+        if !MASKED && !self.wid.present() {
             // Nothing to test or keep: whole rows at once.
             return self.for_each_row(rect, |t, r| t.color.fill(r, c));
         }
@@ -1392,7 +1429,13 @@ mod tests {
                 z,
                 a: 0,
             };
-            if Tile::<32, C>::in_range(<C::Dither as Dither>::NEW, &st(), dz, n) {
+            if Tile::<32, C>::in_range(
+                <C::Dither as Dither>::NEW,
+                <C::Depth as DepthMode>::BITS > 0,
+                &st(),
+                dz,
+                n,
+            ) {
                 fast += 1;
             } else {
                 slow += 1;

@@ -299,7 +299,7 @@ where
             let cov = F::lanes_from_rgb(sum.map(|v| (v as i64) << (COLOR_FRAC - 8)));
             let v = cov.zip(bg, |c, b| c + ((b << COLOR_FRAC) >> 8) * free as i32 + bias);
             let (x, y) = (a.x + (i as u32 % a.w) as i32, a.y + (i as u32 / a.w) as i32);
-            self.store::<false>(i, x as u32, y as u32, v, F::MASK_ALL);
+            self.store::<false, _>(self.dither, i, x as u32, y as u32, v, F::MASK_ALL);
             self.depth.put(i, self.aa.nearest(i));
         }
         self.resolved = true;
@@ -311,16 +311,25 @@ where
     /// dither from the pixel address bits, pack to the display format,
     /// plane mask (when `MASKED`), store. `v` is in the output channel
     /// scale with [`COLOR_FRAC`] fraction bits, rounding bias included.
+    /// `d` is the tile's dither, passed in so that a loop reads it once.
     #[inline(always)]
-    fn store<const MASKED: bool>(&mut self, i: usize, x: u32, y: u32, v: F::Lanes, mask: u32) {
-        self.put_packed::<MASKED>(i, self.pack_at(x, y, v), mask);
+    fn store<const MASKED: bool, Dd: Dither>(
+        &mut self,
+        d: Dd,
+        i: usize,
+        x: u32,
+        y: u32,
+        v: F::Lanes,
+        mask: u32,
+    ) {
+        self.put_packed::<MASKED>(i, Self::pack_at(d, x, y, v), mask);
     }
 
     /// `v` (as in [`Self::store`]) dithered at screen `(x, y)`, quantized
     /// and packed.
     #[inline(always)]
-    fn pack_at(&self, x: u32, y: u32, v: F::Lanes) -> u32 {
-        let carry = self.dither.carry(x, y);
+    fn pack_at<Dd: Dither>(d: Dd, x: u32, y: u32, v: F::Lanes) -> u32 {
+        let carry = d.carry(x, y);
         F::pack(v.zip(F::MAX, |v, max| quantize_carry(v, max, carry)))
     }
 
@@ -328,15 +337,17 @@ where
     /// quantization's saturation and clamp cannot act, so a lane is a
     /// shift ([`Self::pack_at`]'s value, fewer instructions).
     #[inline(always)]
-    fn store_in_range<const MASKED: bool>(
+    #[allow(clippy::too_many_arguments)]
+    fn store_in_range<const MASKED: bool, Dd: Dither>(
         &mut self,
+        d: Dd,
         i: usize,
         x: u32,
         y: u32,
         v: F::Lanes,
         mask: u32,
     ) {
-        let carry = self.dither.carry(x, y);
+        let carry = d.carry(x, y);
         let q = v.map(|v| (v as u32 + carry as u32) as i32 >> COLOR_FRAC);
         self.put_packed::<MASKED>(i, F::pack(q), mask);
     }
@@ -362,7 +373,7 @@ where
         let v = lanes.zip(old, |p, o| {
             p + ((o as i64 * keep as i64) >> 15) as i32 + bias
         });
-        self.store::<false>(i, x, y, v, F::MASK_ALL);
+        self.store::<false, _>(self.dither, i, x, y, v, F::MASK_ALL);
     }
 
     /// The end of [`Self::store`] for an already packed value (flat fills

@@ -28,8 +28,9 @@ use tilerast_fw::panel::{camera, init_st7789, turn, window};
 
 esp_bootloader_esp_idf::esp_app_desc!();
 
-/// 60x40-pixel tiles, ST7789 preset (RGB565 + 16-bit Z + 4x4 dither).
-type PanelTile = Tile<{ groups(60, 40) }, St7789Config>;
+/// The renderer: 60x40-pixel tiles of the ST7789 preset (RGB565 + 16-bit
+/// Z + 4x4 dither), bins and state with their defaults.
+type Panel = Renderer<St7789Config, { groups(60, 40) }>;
 
 /// Bytes of one tile as the panel takes it.
 const TILE_BYTES: usize = 60 * 40 * 2;
@@ -60,16 +61,15 @@ fn main() -> ! {
     let mut link = Some(Link::Idle(bus.with_dma(p.DMA_CH0)));
     let mut next = Some(dma_tx_buffer!(TILE_BYTES).expect("DMA buffer"));
     let mut spare = Some(dma_tx_buffer!(TILE_BYTES).expect("DMA buffer"));
-    println!("ST7789 ready; {} bytes per tile", PanelTile::plane_bytes());
+    println!("ST7789 ready; {} bytes of renderer", Panel::BYTES);
 
-    // 60x40 tiles: checked against `PanelTile` when compiling.
-    let mut frame = PanelTile::frame::<60, 40>(240, 240).expect("frame");
-    frame.clear = Clear {
-        color: Rgb::new(8, 8, 16),
-        ..Clear::default()
-    };
-    let mut tile = PanelTile::new();
-    let mut bins: Bins<256, 36> = Bins::new();
+    // 60x40 tiles (a window the panel takes per DMA transfer).
+    let mut renderer = Panel::with_tile(240, 240, 60, 40)
+        .expect("renderer")
+        .with_clear(Clear {
+            color: Rgb::new(8, 8, 16),
+            ..Clear::default()
+        });
     let mut mesh_buf = [0u8; CUBE_BYTES];
     let cube = Mesh::cube(&mut mesh_buf).expect("cube");
     let mut slots = [VertexSlot::EMPTY; 24];
@@ -85,7 +85,7 @@ fn main() -> ! {
         let drawn = turn(&mut scene, &cube, angle)
             .map_err(FlushError::Raster)
             .and_then(|()| {
-                frame.render_binned(&mut tile, &mut bins, &scene, |t| {
+                renderer.render(&scene, |t| {
                     // Pack tile k+1 while tile k is still streaming out...
                     let mut buf = next
                         .take()

@@ -23,8 +23,9 @@ use ssd1306::{prelude::*, I2CDisplayInterface, Ssd1306};
 use tilerast::prelude::*;
 use {defmt_rtt as _, panic_probe as _};
 
-/// The whole 128x64 screen as one tile of the SSD1306 preset: 1 KB.
-type OledTile = Tile<{ groups(128, 64) }, Ssd1306Config>;
+/// The renderer: the whole 128x64 screen as one tile of the SSD1306
+/// preset (1 KB), bins and state with their defaults.
+type Oled = Renderer<Ssd1306Config, { groups(128, 64) }>;
 
 /// A spinning shaded triangle over a grey ramp (the dither shows both).
 fn scene(list: &mut DisplayList<3>, angle: f32) -> Result<(), Error> {
@@ -93,11 +94,10 @@ fn main() -> ! {
     )
     .into_buffered_graphics_mode();
     display.init().unwrap();
-    defmt::info!("SSD1306 ready; {} bytes per tile", OledTile::plane_bytes());
+    defmt::info!("SSD1306 ready; {} bytes of renderer", Oled::BYTES);
 
-    // One tile covers the screen: checked against `OledTile` when compiling.
-    let frame = OledTile::frame::<128, 64>(128, 64).unwrap();
-    let mut tile = OledTile::new();
+    // One tile covers the screen.
+    let mut renderer = Oled::new(128, 64).unwrap();
     let mut list: DisplayList<3> = DisplayList::new();
     let text = MonoTextStyle::new(&FONT_6X10, BinaryColor::On);
     let mut angle = 0.0f32;
@@ -107,7 +107,7 @@ fn main() -> ! {
         // Errors are reported, never discarded into a blank screen.
         match scene(&mut list, angle) {
             Ok(()) => {
-                let drawn = frame.render_with(&mut tile, &list, |t| {
+                let drawn = renderer.render(&list, |t| {
                     // The tile's own errors are `Infallible`.
                     let Ok(_) = Text::new("tilerast", Point::new(2, 9), text).draw(t);
                     t.flush(&mut display)

@@ -18,8 +18,9 @@ use tilerast::geometry::{Angle, Mesh, Real, Scene, VertexSlot, CUBE_BYTES};
 use tilerast::prelude::*;
 use tilerast_fw::panel::{camera, turn, window};
 
-/// 60x40-pixel tiles, ST7789 preset (RGB565 + 16-bit Z + 4x4 dither).
-type PanelTile = Tile<{ groups(60, 40) }, St7789Config>;
+/// The renderer: 60x40-pixel tiles of the ST7789 preset (RGB565 + 16-bit
+/// Z + 4x4 dither), bins and state with their defaults.
+type Panel = Renderer<St7789Config, { groups(60, 40) }>;
 
 /// Bytes of one tile as the panel takes it.
 const TILE_BYTES: usize = 60 * 40 * 2;
@@ -44,16 +45,15 @@ where
     let mut link = Some(Link::Idle(ch, bus));
     let mut next: Option<Buf> = cortex_m::singleton!(: [u8; TILE_BYTES] = [0; TILE_BYTES]);
     let mut spare: Option<Buf> = cortex_m::singleton!(: [u8; TILE_BYTES] = [0; TILE_BYTES]);
-    defmt::info!("ST7789 ready; {} bytes per tile", PanelTile::plane_bytes());
+    defmt::info!("ST7789 ready; {} bytes of renderer", Panel::BYTES);
 
-    // 60x40 tiles: checked against `PanelTile` when compiling.
-    let mut frame = PanelTile::frame::<60, 40>(240, 240).unwrap();
-    frame.clear = Clear {
-        color: Rgb::new(8, 8, 16),
-        ..Clear::default()
-    };
-    let mut tile = PanelTile::new();
-    let mut bins: Bins<256, 36> = Bins::new();
+    // 60x40 tiles (a window the panel takes per DMA transfer).
+    let mut renderer = Panel::with_tile(240, 240, 60, 40)
+        .unwrap()
+        .with_clear(Clear {
+            color: Rgb::new(8, 8, 16),
+            ..Clear::default()
+        });
     let mut mesh_buf = [0u8; CUBE_BYTES];
     let cube = Mesh::cube(&mut mesh_buf).unwrap();
     let mut slots = [VertexSlot::EMPTY; 24];
@@ -69,7 +69,7 @@ where
         let drawn = turn(&mut scene, &cube, angle)
             .map_err(FlushError::Raster)
             .and_then(|()| {
-                frame.render_binned(&mut tile, &mut bins, &scene, |t| {
+                renderer.render(&scene, |t| {
                     // Pack tile k+1 while tile k is still streaming out...
                     let buf = next
                         .take()
