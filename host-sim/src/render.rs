@@ -294,9 +294,9 @@ pub type HostWid = Switchable<Wid8>;
 fn without_coverage(cfg: &Config, cmds: &[Command], runs: usize) -> Result<Rendered, Error> {
     use tilerast::area::AreaAa;
     if cfg.depth {
-        by_format::<AreaAa, Depth16, SIM_GROUPS>(cfg, cmds, runs)
+        by_format::<AreaAa, Depth16, RuntimeDither, SIM_GROUPS>(cfg, cmds, runs)
     } else {
-        by_format::<AreaAa, NoDepth, SIM_GROUPS>(cfg, cmds, runs)
+        by_format::<AreaAa, NoDepth, RuntimeDither, SIM_GROUPS>(cfg, cmds, runs)
     }
 }
 
@@ -318,7 +318,7 @@ pub fn dither_log2(side: u8) -> Option<u32> {
 /// build figures). With coverage antialiasing the depth test is always on
 /// (a depth per sample; the depth plane then holds each pixel's nearest
 /// sample for the lines drawn over the resolved image).
-fn by_format<A: AaMode, Z: DepthMode, const G: usize>(
+fn by_format<A: AaMode, Z: DepthMode, D: Dither, const G: usize>(
     cfg: &Config,
     cmds: &[Command],
     runs: usize,
@@ -326,20 +326,43 @@ fn by_format<A: AaMode, Z: DepthMode, const G: usize>(
     if dither_log2(cfg.dither).is_none() {
         return Err(Error::BadSize);
     }
-    type P<F, Z, A> =
-        Planes<F, Z, HostWid, RuntimeDither, A, FullPrecision, AlphaBlending, QuadraticShading>;
+    type P<F, Z, D, A> =
+        Planes<F, Z, HostWid, D, A, FullPrecision, AlphaBlending, QuadraticShading>;
     match cfg.format {
-        FormatKind::Rgb888 => render_source::<P<Rgb888Format, Z, A>, _, G>(cfg, cmds, runs),
-        FormatKind::Rgb565 => render_source::<P<Rgb565Format, Z, A>, _, G>(cfg, cmds, runs),
-        FormatKind::Rgb444 => render_source::<P<Rgb444Format, Z, A>, _, G>(cfg, cmds, runs),
-        FormatKind::Gray8 => render_source::<P<Gray8Format, Z, A>, _, G>(cfg, cmds, runs),
-        FormatKind::Binary => render_source::<P<BinaryFormat, Z, A>, _, G>(cfg, cmds, runs),
+        FormatKind::Rgb888 => render_source::<P<Rgb888Format, Z, D, A>, _, G>(cfg, cmds, runs),
+        FormatKind::Rgb565 => render_source::<P<Rgb565Format, Z, D, A>, _, G>(cfg, cmds, runs),
+        FormatKind::Rgb444 => render_source::<P<Rgb444Format, Z, D, A>, _, G>(cfg, cmds, runs),
+        FormatKind::Gray8 => render_source::<P<Gray8Format, Z, D, A>, _, G>(cfg, cmds, runs),
+        FormatKind::Binary => render_source::<P<BinaryFormat, Z, D, A>, _, G>(cfg, cmds, runs),
     }
 }
 
 /// [`by_format`] with a coverage plane of mode `A`.
 fn aa_format<A: AaMode>(cfg: &Config, cmds: &[Command], runs: usize) -> Result<Rendered, Error> {
-    by_format::<A, Depth16, AA_GROUPS>(cfg, cmds, runs)
+    by_format::<A, Depth16, OneLoopDither, AA_GROUPS>(cfg, cmds, runs)
+}
+
+/// [`RuntimeDither`] without its second span loop for level 0
+/// ([`Dither::VARIES`] false): the dither of the coverage and texture
+/// pipelines, whose pixels cost many span steps each. One span loop per
+/// pipeline instead of two keeps the build within its memory (the same
+/// pixels: the level-0 loop is an optimisation).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct OneLoopDither(RuntimeDither);
+
+impl Dither for OneLoopDither {
+    const NEW: Self = OneLoopDither(RuntimeDither::NEW);
+    #[inline(always)]
+    fn log2(self) -> u32 {
+        self.0.log2()
+    }
+    fn with_log2(log2: u32) -> Option<Self> {
+        RuntimeDither::with_log2(log2).map(OneLoopDither)
+    }
+    #[inline(always)]
+    fn carry(self, x: u32, y: u32) -> i32 {
+        self.0.carry(x, y)
+    }
 }
 
 /// The frame and a boxed tile of `G` groups for `cfg`, the tile shrunk
@@ -486,7 +509,7 @@ pub fn render_textured(
             F,
             Depth16,
             NoWid,
-            RuntimeDither,
+            OneLoopDither,
             NoAa,
             FullPrecision,
             AlphaBlending,
