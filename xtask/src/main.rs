@@ -364,6 +364,48 @@ fn test() -> Result<(), String> {
     Ok(())
 }
 
+/// The simulator's frames in instructions (callgrind, when valgrind is
+/// installed): values against types, a table for `reports/bench.md`.
+/// Times move by up to 20% between builds of the same code (layout);
+/// instruction counts do not.
+fn sim_instructions() -> Result<String, String> {
+    if Command::new("valgrind").arg("--version").output().is_err() {
+        return Ok("\n(valgrind is not installed: no instruction counts for the simulator's frames.)\n".into());
+    }
+    run(
+        "cargo",
+        &["build", "--release", "-q", "-p", "tilerast-lab", "--example", "sim_cost"],
+    )?;
+    let count = |scene: &str, variant: &str, n: &str| -> Result<u64, String> {
+        let out = Command::new("valgrind")
+            .args(["--tool=callgrind", "--callgrind-out-file=/dev/null"])
+            .args(["target/release/examples/sim_cost", scene, variant, n])
+            .output()
+            .map_err(|e| e.to_string())?;
+        let text = String::from_utf8_lossy(&out.stderr);
+        text.split("Collected : ")
+            .nth(1)
+            .and_then(|t| t.split_whitespace().next())
+            .and_then(|t| t.parse().ok())
+            .ok_or_else(|| format!("callgrind printed no count for {scene} {variant}"))
+    };
+    let mut md = String::from(
+        "\n## The simulator's frames in instructions\n\nCallgrind, per frame (10 frames less 0: scene loading excluded); `lab/examples/sim_cost.rs`.\n\n\
+         | scene | planes and dither as values | as types | values / types |\n| --- | ---: | ---: | ---: |\n",
+    );
+    for scene in ["demo", "ssd1306", "teapot"] {
+        let per = |v: &str| -> Result<u64, String> {
+            Ok((count(scene, v, "10")? - count(scene, v, "0")?) / 10)
+        };
+        let (values, types) = (per("values")?, per("types")?);
+        md += &format!(
+            "| {scene} | {values} | {types} | {:.3} |\n",
+            values as f64 / types as f64
+        );
+    }
+    Ok(md)
+}
+
 /// Runs the criterion benchmark and writes `reports/bench.md` from
 /// criterion's own estimates (median time per iteration, throughput).
 fn bench() -> Result<(), String> {
@@ -373,7 +415,7 @@ fn bench() -> Result<(), String> {
     )?;
     let root = std::path::Path::new("target/criterion");
     let mut rows = vec![];
-    for group in ["triangles", "fill", "lines", "large", "filled"] {
+    for group in ["triangles", "fill", "lines", "large", "filled", "sim"] {
         let dir = root.join(group);
         let mut names: Vec<_> = std::fs::read_dir(&dir)
             .map_err(|e| format!("{}: {e}", dir.display()))?
@@ -424,7 +466,8 @@ fn bench() -> Result<(), String> {
             ns / base
         );
     }
-    md += "\nElements are pixels for triangles and fills (covered pixels for the `large` workloads and `filled` triangles), steps along the major axis for lines.\n";
+    md += "\nElements are pixels for triangles and fills (covered pixels for the `large` workloads and `filled` triangles), steps along the major axis for lines, screen pixels for the simulator's frames (`sim`: `_values` is the simulator as built, its window-ID plane and dither values; `_types` the same frame with every plane a type, as the simulator compiled it before).\n";
+    md += &sim_instructions()?;
     std::fs::create_dir_all("reports").map_err(|e| e.to_string())?;
     std::fs::write("reports/bench.md", &md).map_err(|e| e.to_string())?;
     println!("{md}");
