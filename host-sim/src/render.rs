@@ -314,7 +314,7 @@ pub fn dither_log2(side: u8) -> Option<u32> {
 /// depth plane — window ID and dither are values ([`HostWid`],
 /// [`RuntimeDither`]), not types, so the build compiles a handful of
 /// pipelines rather than one per combination (a cold release build went
-/// from 11.6 min and 9.5 GB of memory to about 2 min and 2 GB: the README's
+/// from 11.6 min and 9.5 GB of memory to 2.6 min and 2.3 GB: the README's
 /// build figures). With coverage antialiasing the depth test is always on
 /// (a depth per sample; the depth plane then holds each pixel's nearest
 /// sample for the lines drawn over the resolved image).

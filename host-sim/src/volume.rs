@@ -136,20 +136,35 @@ impl VolumeData {
     /// Errors are sentences naming the file ("the data ends early: 40 of
     /// 512 bytes").
     pub fn load_nifti_within(path: &Path, max_bytes: u64) -> Result<Self> {
+        let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+        Self::read_nifti(std::io::BufReader::new(file), path, max_bytes)
+    }
+
+    /// [`VolumeData::load_nifti_within`] from `input` (a `.nii` or a
+    /// gzipped one, told apart by its first bytes), errors naming `path`.
+    ///
+    /// ```
+    /// use std::path::Path;
+    /// use tilerast_sim::volume::VolumeData;
+    /// let e = VolumeData::read_nifti(&b"short"[..], Path::new("x.nii"), 1 << 20).unwrap_err();
+    /// assert_eq!(e.to_string(), "x.nii: the file ends early: 5 of 352 bytes");
+    /// ```
+    pub fn read_nifti(
+        mut input: impl std::io::BufRead,
+        path: &Path,
+        max_bytes: u64,
+    ) -> Result<Self> {
         use nifti::{InMemNiftiObject, NiftiHeader, NiftiObject, RandomAccessNiftiVolume};
         use std::io::Read;
         let bad = |m: String| Error::Unsupported(format!("{}: {m}", path.display()));
-        let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-        let mut file = std::io::BufReader::new(file);
         let gz = {
-            use std::io::BufRead;
-            let head = file.fill_buf().map_err(|e| Error::io(path, e))?;
+            let head = input.fill_buf().map_err(|e| Error::io(path, e))?;
             head.starts_with(&[0x1f, 0x8b])
         };
-        let mut src: Box<dyn Read> = if gz {
-            Box::new(flate2::bufread::GzDecoder::new(file))
+        let mut src: Box<dyn Read + '_> = if gz {
+            Box::new(flate2::bufread::GzDecoder::new(input))
         } else {
-            Box::new(file)
+            Box::new(input)
         };
         let what = if gz { "the gzip stream" } else { "the file" };
         let read_err = |e: std::io::Error, got: usize, want: u64| -> Error {

@@ -649,3 +649,45 @@ pub fn occlusion(data: &[u8]) -> bool {
     }
     true
 }
+
+/// A PNG texture file, decoded with a limit of 256 pixels a side
+/// ([`tilerast_png::Image::decode`]): never a panic or an allocation the
+/// limit does not bound; a decoded image is within the limit and holds
+/// exactly its pixels; an error is a sentence.
+pub fn png(data: &[u8]) -> bool {
+    match tilerast_png::Image::decode(std::io::Cursor::new(data), 256) {
+        Ok(img) => {
+            assert!(img.width <= 256 && img.height <= 256);
+            assert_eq!(img.pixels.len(), img.width as usize * img.height as usize);
+            true
+        }
+        Err(e) => {
+            assert!(!e.is_empty() && !e.contains("Custom {"), "{e}");
+            false
+        }
+    }
+}
+
+/// A NIfTI-1 volume, plain or gzipped, read with a limit of 1 MiB
+/// ([`tilerast_sim::volume::VolumeData::read_nifti`]): never a panic,
+/// never more than the limit read or allocated; a loaded volume has the
+/// sides it declares (2..=1024) and one density and three normal bytes a
+/// voxel; an error names the file.
+pub fn nifti(data: &[u8]) -> bool {
+    use tilerast_sim::volume::VolumeData;
+    let path = std::path::Path::new("fuzz.nii");
+    match VolumeData::read_nifti(data, path, 1 << 20) {
+        Ok(v) => {
+            let n = v.dims.iter().map(|&d| d as usize).product::<usize>();
+            assert!(v.dims.iter().all(|d| (2..=1024).contains(d)));
+            assert!(n <= 1 << 20);
+            assert_eq!((v.density.len(), v.normals.len()), (n, 3 * n));
+            true
+        }
+        Err(e) => {
+            let e = e.to_string();
+            assert!(e.starts_with("fuzz.nii") && !e.contains("Custom {"), "{e}");
+            false
+        }
+    }
+}

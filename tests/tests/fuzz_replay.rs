@@ -10,7 +10,7 @@ use tilerast_tests::{fuzz, repo, Rng};
 
 type Body = fn(&[u8]) -> bool;
 
-const TARGETS: [(&str, Body); 8] = [
+const TARGETS: [(&str, Body); 10] = [
     ("wire", fuzz::wire),
     ("commands", fuzz::commands),
     ("tile_api", fuzz::tile_api),
@@ -19,6 +19,8 @@ const TARGETS: [(&str, Body); 8] = [
     ("mesh", fuzz::mesh),
     ("volume", fuzz::volume),
     ("occlusion", fuzz::occlusion),
+    ("png", fuzz::png),
+    ("nifti", fuzz::nifti),
 ];
 
 /// Mutations per stored input (more with `FUZZ_REPLAY_MUTATIONS`).
@@ -93,6 +95,8 @@ corpus_tests! {
     mesh_corpus: 5;
     volume_corpus: 6;
     occlusion_corpus: 7;
+    png_corpus: 8;
+    nifti_corpus: 9;
 }
 
 #[test]

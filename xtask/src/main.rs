@@ -370,11 +370,22 @@ fn test() -> Result<(), String> {
 /// instruction counts do not.
 fn sim_instructions() -> Result<String, String> {
     if Command::new("valgrind").arg("--version").output().is_err() {
-        return Ok("\n(valgrind is not installed: no instruction counts for the simulator's frames.)\n".into());
+        return Ok(
+            "\n(valgrind is not installed: no instruction counts for the simulator's frames.)\n"
+                .into(),
+        );
     }
     run(
         "cargo",
-        &["build", "--release", "-q", "-p", "tilerast-lab", "--example", "sim_cost"],
+        &[
+            "build",
+            "--release",
+            "-q",
+            "-p",
+            "tilerast-lab",
+            "--example",
+            "sim_cost",
+        ],
     )?;
     let count = |scene: &str, variant: &str, n: &str| -> Result<u64, String> {
         let out = Command::new("valgrind")
@@ -580,7 +591,7 @@ fn demo() -> Result<(), String> {
 }
 
 /// The cargo-fuzz targets (`fuzz/fuzz_targets/*.rs`).
-const FUZZ_TARGETS: [&str; 8] = [
+const FUZZ_TARGETS: [&str; 10] = [
     "wire",
     "commands",
     "tile_api",
@@ -589,6 +600,8 @@ const FUZZ_TARGETS: [&str; 8] = [
     "mesh",
     "volume",
     "occlusion",
+    "png",
+    "nifti",
 ];
 
 fn fuzz(args: &[String]) -> Result<(), String> {
