@@ -42,6 +42,27 @@ pub use tilerast_sim::rng::Rng;
 
 pub mod fuzz;
 
+/// Two overlapping window claims (IDs 1 and 2) and then `n` random
+/// commands ([`random_command`]) in windows 0..3.
+pub fn windowed_commands(seed: u64, n: usize) -> Vec<Command> {
+    let mut rng = Rng::new(seed);
+    let mut cmds = vec![
+        Command::WidFill {
+            rect: Rect::new(0, 0, 50, 40),
+            wid: 1,
+        },
+        Command::WidFill {
+            rect: Rect::new(30, 20, 60, 50),
+            wid: 2,
+        },
+    ];
+    for _ in 0..n {
+        let wid = rng.range(0, 3) as u8;
+        cmds.push(random_command(&mut rng, wid));
+    }
+    cmds
+}
+
 /// A configuration with everything off but the format.
 pub fn config(w: u16, h: u16, format: FormatKind) -> Config {
     Config {

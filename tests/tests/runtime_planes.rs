@@ -9,26 +9,12 @@ use tilerast::coverage::Ruf8;
 use tilerast::prelude::*;
 use tilerast_sim::render::{render_as, AA_GROUPS, SIM_GROUPS};
 use tilerast_sim::{render, AaKind, Config, FormatKind, Rendered};
-use tilerast_tests::{config, random_command, Rng};
+use tilerast_tests::{config, windowed_commands};
 
 /// Random commands of every kind, window IDs 0..3 over two window fills;
 /// edge flags cleared (the simulator clears them without area AA).
 fn commands(seed: u64) -> Vec<Command> {
-    let mut rng = Rng::new(seed);
-    let mut cmds = vec![
-        Command::WidFill {
-            rect: Rect::new(0, 0, 50, 40),
-            wid: 1,
-        },
-        Command::WidFill {
-            rect: Rect::new(30, 20, 60, 50),
-            wid: 2,
-        },
-    ];
-    for _ in 0..14 {
-        let wid = rng.range(0, 3) as u8;
-        cmds.push(random_command(&mut rng, wid));
-    }
+    let mut cmds = windowed_commands(seed, 14);
     for c in &mut cmds {
         if let Command::Triangle { v, .. } = c {
             v.iter_mut().for_each(|v| v.edge_flag = false);

@@ -4,7 +4,7 @@
 use proptest::prelude::*;
 use tilerast::prelude::*;
 use tilerast_sim::{render, FormatKind, Scene};
-use tilerast_tests::{config, random_command, scene, tri, vsub, Rng};
+use tilerast_tests::{config, scene, tri, vsub, windowed_commands, Rng};
 
 #[test]
 fn demo_scene_is_tile_size_independent() {
@@ -21,25 +21,6 @@ fn demo_scene_is_tile_size_independent() {
     }
 }
 
-fn random_commands(seed: u64, n: usize) -> Vec<Command> {
-    let mut rng = Rng::new(seed);
-    let mut cmds = vec![
-        Command::WidFill {
-            rect: Rect::new(0, 0, 50, 40),
-            wid: 1,
-        },
-        Command::WidFill {
-            rect: Rect::new(30, 20, 60, 50),
-            wid: 2,
-        },
-    ];
-    for _ in 0..n {
-        let wid = rng.range(0, 3) as u8;
-        cmds.push(random_command(&mut rng, wid));
-    }
-    cmds
-}
-
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(tilerast_tests::cases(24)))]
     #[test]
@@ -49,7 +30,7 @@ proptest! {
         c.depth = true;
         c.wid = true;
         c.dither = dither;
-        let cmds = random_commands(seed, 12);
+        let cmds = windowed_commands(seed, 12);
         let whole = render(&c, &cmds).unwrap();
         c.tile = (tw, th);
         let tiled = render(&c, &cmds).unwrap();

@@ -415,6 +415,24 @@ mod planes {
         }
     }
 
+    /// The switch of a [`Switch`] plane, the same for both plane traits.
+    macro_rules! switch_flag {
+        ($plane:ident) => {
+            const NEW: Self = Switch {
+                off: false,
+                plane: <P as $plane>::NEW,
+            };
+            #[inline(always)]
+            fn present(&self) -> bool {
+                !self.off
+            }
+            #[inline(always)]
+            fn set_present(&mut self, on: bool) {
+                self.off = !on;
+            }
+        };
+    }
+
     /// Storage of a [`Switchable`] plane: plane `P` and whether it is
     /// off; off, every method answers as the absent plane `()` does. (The
     /// flag says *off* so that a new plane is all zero bits: a boxed tile
@@ -425,18 +443,7 @@ mod planes {
     }
 
     impl<P: DepthPlane> DepthPlane for Switch<P> {
-        const NEW: Self = Switch {
-            off: false,
-            plane: <P as DepthPlane>::NEW,
-        };
-        #[inline(always)]
-        fn present(&self) -> bool {
-            !self.off
-        }
-        #[inline(always)]
-        fn set_present(&mut self, on: bool) {
-            self.off = !on;
-        }
+        switch_flag!(DepthPlane);
         #[inline(always)]
         fn put(&mut self, i: usize, z: u16) {
             if !self.off {
@@ -480,18 +487,7 @@ mod planes {
     }
 
     impl<P: WidPlane> WidPlane for Switch<P> {
-        const NEW: Self = Switch {
-            off: false,
-            plane: <P as WidPlane>::NEW,
-        };
-        #[inline(always)]
-        fn present(&self) -> bool {
-            !self.off
-        }
-        #[inline(always)]
-        fn set_present(&mut self, on: bool) {
-            self.off = !on;
-        }
+        switch_flag!(WidPlane);
         #[inline(always)]
         fn put(&mut self, i: usize, id: u8) {
             if !self.off {
