@@ -636,27 +636,158 @@ fn fuzz(args: &[String]) -> Result<(), String> {
         run_with("fuzz", &[("RUSTC_BOOTSTRAP", "1")], "cargo", &all)
     };
     let time = format!("-max_total_time={seconds}");
+    std::fs::create_dir_all("target/fuzz-logs").map_err(|e| e.to_string())?;
+    let mut rows = fuzz_report_rows();
+    let mut found = vec![];
     for t in targets {
         let (corpus, seeds) = (format!("corpus/{t}"), format!("seeds/{t}"));
+        fuzz(&["build", "-O", "-a", t])?;
         // Optimised, with debug assertions and overflow checks on (-a); new
         // inputs go to the corpus, the hand-written seeds stay as they are.
-        fuzz(&[
-            "run",
-            "-O",
-            "-a",
-            t,
-            &corpus,
-            &seeds,
-            "--",
-            &time,
-            "-rss_limit_mb=4096",
-            "-max_len=8192",
-        ])?;
+        // libFuzzer's log goes to a file the report is read from.
+        let log = format!("target/fuzz-logs/{t}.log");
+        let file = std::fs::File::create(&log).map_err(|e| format!("{log}: {e}"))?;
+        eprintln!("xtask: fuzzing `{t}` for {seconds} s (libFuzzer's log: {log})");
+        let status = Command::new("cargo")
+            .current_dir("fuzz")
+            .env("RUSTC_BOOTSTRAP", "1")
+            .args(["fuzz", "run", "-O", "-a", t, &corpus, &seeds, "--"])
+            .args([&time, "-rss_limit_mb=4096", "-max_len=8192"])
+            .stderr(file)
+            .status()
+            .map_err(|e| format!("cannot run cargo fuzz: {e}"))?;
+        let text = std::fs::read_to_string(&log).unwrap_or_default();
+        let mut row = FuzzRow::from_log(t, seconds, &text);
+        if !status.success() {
+            row.findings = text
+                .lines()
+                .filter_map(|l| l.split("Test unit written to ").nth(1))
+                .map(|p| p.trim().to_string())
+                .collect();
+            if row.findings.is_empty() {
+                row.findings.push(format!("exit {status}, see {log}"));
+            }
+            found.push(format!("`{t}`: {}", row.findings.join(", ")));
+        }
         // Keep what adds an edge (not a hit count): a corpus small enough
         // for the repository and for the stable replay in `cargo xtask test`.
         fuzz(&["cmin", "-O", "-a", t, &corpus, "--", "-use_counters=0"])?;
+        row.kept = std::fs::read_dir(format!("fuzz/{corpus}")).map_or(0, |d| d.count());
+        eprintln!("xtask: {}", row.line());
+        rows.retain(|(name, _)| name != t);
+        rows.push((t.to_string(), row.line()));
+        write_fuzz_report(&rows)?;
     }
-    Ok(())
+    if found.is_empty() {
+        Ok(())
+    } else {
+        Err(format!(
+            "fuzzing found inputs that fail: {}",
+            found.join("; ")
+        ))
+    }
+}
+
+/// One target's campaign, as `reports/fuzz.md` states it.
+struct FuzzRow {
+    target: String,
+    seconds: u64,
+    runs: u64,
+    cov: u64,
+    features: u64,
+    kept: usize,
+    findings: Vec<String>,
+}
+
+impl FuzzRow {
+    /// The figures libFuzzer's log ends with (`Done N runs in S second(s)`
+    /// and the last status line's `cov:` and `ft:`).
+    fn from_log(target: &str, seconds: u64, log: &str) -> FuzzRow {
+        let after = |line: &str, key: &str| -> Option<u64> {
+            line.split(key)
+                .nth(1)?
+                .split_whitespace()
+                .next()?
+                .parse()
+                .ok()
+        };
+        let mut row = FuzzRow {
+            target: target.into(),
+            seconds,
+            runs: 0,
+            cov: 0,
+            features: 0,
+            kept: 0,
+            findings: vec![],
+        };
+        for l in log.lines() {
+            if let Some(n) = after(l, "Done ") {
+                row.runs = n;
+            }
+            if l.starts_with('#') {
+                row.cov = after(l, "cov: ").unwrap_or(row.cov);
+                row.features = after(l, "ft: ").unwrap_or(row.features);
+                if let Some(n) = l
+                    .get(1..)
+                    .and_then(|r| r.split_whitespace().next()?.parse().ok())
+                {
+                    row.runs = row.runs.max(n);
+                }
+            }
+        }
+        row
+    }
+
+    fn line(&self) -> String {
+        let findings = if self.findings.is_empty() {
+            "none".to_string()
+        } else {
+            self.findings.join(", ")
+        };
+        format!(
+            "| `{}` | {} | {} | {} | {} | {} | {} | {} |",
+            self.target,
+            self.seconds,
+            self.runs,
+            self.runs / self.seconds.max(1),
+            self.cov,
+            self.features,
+            self.kept,
+            findings
+        )
+    }
+}
+
+/// The rows `reports/fuzz.md` holds already (a campaign may run some
+/// targets only: the others keep their last figures).
+fn fuzz_report_rows() -> Vec<(String, String)> {
+    let text = std::fs::read_to_string("reports/fuzz.md").unwrap_or_default();
+    text.lines()
+        .filter(|l| l.starts_with("| `"))
+        .filter_map(|l| Some((l.split('`').nth(1)?.to_string(), l.to_string())))
+        .collect()
+}
+
+fn write_fuzz_report(rows: &[(String, String)]) -> Result<(), String> {
+    let mut rows = rows.to_vec();
+    rows.sort_by_key(|(t, _)| FUZZ_TARGETS.iter().position(|f| f == t));
+    let mut out = String::from(
+        "# Fuzzing campaigns\n\n\
+         Written by `cargo xtask fuzz --seconds N [TARGET...]`: each target runs under \
+         libFuzzer (`cargo fuzz run -O -a`: optimised, AddressSanitizer, debug assertions and \
+         overflow checks on, inputs up to 8 KB, 4 GB RSS limit) from its committed corpus and \
+         hand-written seeds (`fuzz/corpus/`, `fuzz/seeds/`), then the corpus is minimised \
+         (`cargo fuzz cmin`) and committed; `cargo xtask test` replays every corpus and seed \
+         on stable. What each target feeds and what it checks: `tests/src/fuzz.rs`. A target \
+         run again replaces its row; the others keep theirs.\n\n\
+         | target | seconds | executions | per second | edges (`cov`) | features (`ft`) | corpus kept | findings |\n\
+         | --- | ---: | ---: | ---: | ---: | ---: | ---: | --- |\n",
+    );
+    for (_, line) in rows {
+        out.push_str(&line);
+        out.push('\n');
+    }
+    std::fs::write("reports/fuzz.md", out).map_err(|e| format!("reports/fuzz.md: {e}"))
 }
 
 fn main() -> ExitCode {

@@ -564,7 +564,7 @@ where
         if BLEND {
             self.blend_span::<true, QUAD>(x0, py, n, start, q.ddc, (a, t.p.alpha[1]), st);
         } else {
-            self.span_with::<QUAD>(x0, py, n, start, q.ddc, st);
+            self.span_with::<QUAD, false>(x0, py, n, start, q.ddc, st);
         }
     }
 
@@ -889,7 +889,7 @@ where
         if end > Self::CAPACITY {
             return;
         }
-        if MODE == OPAQUE
+        if MODE & !IN_RANGE == OPAQUE
             && !MASKED
             && self.slice_fills()
             && (0..F::Lanes::LEN).all(|i| dc.lane(i) == 0)
@@ -903,11 +903,14 @@ where
         }
         let st = SpanState { c, dc, ddc, z, a };
         let steps = (s.dz, da);
+        // Known in range: a span's values within half an output unit of
+        // convex combinations of in-range vertex values, which rounding to
+        // nearest (no dither's carry) keeps in range.
+        let known = MODE & IN_RANGE != 0 && self.dither.carry_max() == 0;
         if CLAMP_FREE_SPANS
-            && MODE == OPAQUE
+            && MODE & !IN_RANGE == OPAQUE
             && !MASKED
-            && n > 2
-            && Self::in_range(self.dither, self.depth.present(), &st, s.dz, n)
+            && (known || n > 2 && Self::in_range(self.dither, self.depth.present(), &st, s.dz, n))
         {
             // Every value in range: the loop without its clamps (the
             // micro:bit's large Gouraud + Z workload 77.0 -> 60.3
@@ -927,7 +930,7 @@ where
     /// form, whose 32-bit products hold values 2^8 times larger.
     #[inline(always)]
     fn scaled_blend<const MODE: u8, Dd: Dither>(d: Dd) -> bool {
-        MODE & !QUAD_STEP != OPAQUE
+        MODE & !(QUAD_STEP | IN_RANGE) != OPAQUE
             && MODE & QUAD_STEP == 0
             && d.round_bias() >= 1 << 8
             && (0..F::Lanes::LEN).all(|i| F::MAX.lane(i) < 128)
@@ -1013,7 +1016,7 @@ where
         wid: u8,
         mask: u32,
     ) {
-        let blend = MODE & !QUAD_STEP;
+        let blend = MODE & !(QUAD_STEP | IN_RANGE);
         let bias = d.round_bias();
         let scaled = Self::scaled_blend::<MODE, Dd>(d);
         for idx in range {
@@ -1122,13 +1125,13 @@ where
     /// clipped to this tile.
     #[inline(always)]
     pub(crate) fn span(&mut self, x: i64, y: i64, n: i64, s: SpanStart<F::Lanes>, st: &State) {
-        self.span_with::<false>(x, y, n, s, s.dc, st);
+        self.span_with::<false, false>(x, y, n, s, s.dc, st);
     }
 
     /// [`Self::span`], with `QUAD`: the colour step `s.dc` grows by `ddc`
     /// every pixel.
     #[inline(always)]
-    pub(crate) fn span_with<const QUAD: bool>(
+    pub(crate) fn span_with<const QUAD: bool, const KNOWN: bool>(
         &mut self,
         x: i64,
         y: i64,
@@ -1151,6 +1154,17 @@ where
         let n = n as usize;
         if QUAD {
             self.span_masked::<{ OPAQUE | QUAD_STEP }>(
+                idx,
+                xs,
+                ys,
+                n,
+                (s, ddc),
+                (0, 0),
+                st.wid,
+                mask,
+            );
+        } else if KNOWN {
+            self.span_masked::<{ OPAQUE | IN_RANGE }>(
                 idx,
                 xs,
                 ys,
@@ -1224,6 +1238,11 @@ const BLEND: u8 = 2;
 const BLEND_Z_WRITE: u8 = 3;
 /// Added to a span-loop mode: second-order colour stepping.
 const QUAD_STEP: u8 = 4;
+/// Added to [`OPAQUE`]: every value of the span is known to lie where the
+/// store's clamps cannot act once rounded to nearest (the plane contract's
+/// spans: `crate::tile::mesh`), so without a dither the loop skips both
+/// the clamps and the check ([`Tile::in_range`]).
+pub(super) const IN_RANGE: u8 = 8;
 
 /// A colour in the output channel scale with [`COLOR_FRAC`](crate::numeric::COLOR_FRAC) fraction bits.
 #[inline(always)]

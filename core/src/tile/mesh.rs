@@ -92,9 +92,12 @@ struct Plane {
 /// and the anchor's offset from vertex 0.
 struct Recip {
     /// Steps of the weights of vertices 1 and 2 per pixel (`x`) and per
-    /// row (`y`), 30 fraction bits.
+    /// row (`y`), `bits` fraction bits.
     wx: (i32, i32),
     wy: (i32, i32),
+    /// Fraction bits of the weights' steps: [`W_BITS`], fewer for a
+    /// sliver (whose weights change by 2 or more a pixel or a row).
+    bits: u32,
     /// Anchor centre minus vertex 0, sub-pixels.
     o: (i32, i32),
 }
@@ -105,6 +108,11 @@ pub(crate) const PLANE_AREA_LIMIT: i32 = 1 << 16;
 
 /// Fraction bits of the weights' steps.
 const W_BITS: u32 = 30;
+
+/// How far a weight's step may change across the triangle's box, at most:
+/// `2^8` with [`W_BITS`] fraction bits, the bound every value's error
+/// follows from ([`Recip::conditioned`]).
+const W_SPREAD_BITS: u32 = W_BITS + 8;
 
 /// `floor((2^46 - 1) / a)` for `0 < a < 2^16`, by three 32-bit divisions
 /// (16-bit digits of long division): at least 2^30, so within 2^-30 of
@@ -123,23 +131,60 @@ pub(crate) fn reciprocal46(a: u32) -> u64 {
 impl Recip {
     /// From the doubled area and the steps of the edges opposite vertices
     /// 1 and 2 per pixel (`a`) and per row (`s`): each weight's step
-    /// `round(k r / 2^16)`, `k / area2` with 30 fraction bits; `None` when
-    /// a weight changes by 2 or more a pixel or a row (`|k| >= 2 area2`: a
-    /// sliver, outside the contract's domain; below it `k r < 2^47`).
+    /// `round(k r / 2^16)`, `k / area2` with 30 fraction bits, and the
+    /// weights' spread over a box of `extent` (width plus height) pixels
+    /// checked ([`Self::conditioned`]). A sliver's steps (a weight
+    /// changing by 2 or more a pixel or a row: `|k| >= 2 area2`) do not
+    /// fit `i32` with 30 fraction bits; they keep `30 - s`, the fewest
+    /// dropped bits `s` that fit, rounded (so `|k| < 2^15 area2`, where
+    /// `k r < 2^62`). `None` outside the contract's domain.
     #[inline(always)]
-    fn new(area2: i32, a: (i32, i32), s: (i32, i32), o: (i32, i32)) -> Option<Recip> {
-        let lim = 2 * area2 as u32;
-        if (a.0.unsigned_abs() | a.1.unsigned_abs() | s.0.unsigned_abs() | s.1.unsigned_abs())
-            >= lim
-        {
-            // (An OR of the magnitudes is at least their largest.)
+    fn new(area2: i32, a: (i32, i32), s: (i32, i32), o: (i32, i32), extent: u32) -> Option<Recip> {
+        let m = a.0.unsigned_abs() | a.1.unsigned_abs() | s.0.unsigned_abs() | s.1.unsigned_abs();
+        // (An OR of the magnitudes is at least their largest, below twice it.)
+        let r = reciprocal46(area2 as u32) as i64;
+        if m < 2 * area2 as u32 {
+            // Every step below 2^31: the common case, 32-bit steps.
+            let w = |k: i32| ((k as i64 * r + (1 << 15)) >> (46 - W_BITS)) as i32;
+            let rc = Recip {
+                wx: (w(a.0), w(a.1)),
+                wy: (w(s.0), w(s.1)),
+                bits: W_BITS,
+                o,
+            };
+            return rc.conditioned(extent).then_some(rc);
+        }
+        Self::sliver(area2, r, m, (a, s), o, extent)
+    }
+
+    /// [`Self::new`] for a sliver: fewer fraction bits, out of line.
+    #[inline(never)]
+    #[cold]
+    fn sliver(
+        area2: i32,
+        r: i64,
+        m: u32,
+        (a, s): ((i32, i32), (i32, i32)),
+        o: (i32, i32),
+        extent: u32,
+    ) -> Option<Recip> {
+        if m as u64 >= (area2 as u64) << 15 {
             return None;
         }
-        let r = reciprocal46(area2 as u32) as i64;
-        let w = |k: i32| ((k as i64 * r + (1 << 15)) >> (46 - W_BITS)) as i32;
+        let w = |k: i32| (k as i64 * r + (1 << 15)) >> (46 - W_BITS);
+        let (wx, wy) = ((w(a.0), w(a.1)), (w(s.0), w(s.1)));
+        let big =
+            wx.0.unsigned_abs() | wx.1.unsigned_abs() | wy.0.unsigned_abs() | wy.1.unsigned_abs();
+        // The spread across the box, in the weights' full precision.
+        if (64 - big.leading_zeros()) + (32 - extent.leading_zeros()) > W_SPREAD_BITS {
+            return None;
+        }
+        let drop = (64 - big.leading_zeros()).saturating_sub(31);
+        let n = |w: i64| ((w + ((1 << drop) >> 1)) >> drop) as i32;
         Some(Recip {
-            wx: (w(a.0), w(a.1)),
-            wy: (w(s.0), w(s.1)),
+            wx: (n(wx.0), n(wx.1)),
+            wy: (n(wy.0), n(wy.1)),
+            bits: W_BITS - drop,
             o,
         })
     }
@@ -148,23 +193,28 @@ impl Recip {
     /// `extent` (width plus height) pixels: the domain, where a value's
     /// error stays below `2^8 |d| 2^-30` (`|d|` the attribute's largest
     /// difference between vertices, in its DDA units) plus the steps'
-    /// rounding — under 1/64 of a depth unit.
+    /// rounding — under 1/64 of a depth unit. (A sliver's steps, with
+    /// `s` fraction bits dropped, err by up to `2^(s-1)` units of 2^-30
+    /// more; its spread bound keeps `2^s extent <= 2^8`, so the same
+    /// order: `tile::mesh`'s tests measure it.)
     #[inline(always)]
     fn conditioned(&self, extent: u32) -> bool {
         let m = self.wx.0.unsigned_abs()
             | self.wx.1.unsigned_abs()
             | self.wy.0.unsigned_abs()
             | self.wy.1.unsigned_abs();
-        (32 - m.leading_zeros()) + (32 - extent.leading_zeros()) <= W_BITS + 8
+        (32 - m.leading_zeros()) + (32 - extent.leading_zeros()) <= W_SPREAD_BITS
     }
 
     /// The plane of an attribute worth `a0` at vertex 0 and `a0 + d1`,
     /// `a0 + d2` at the (oriented) others: steps `round(d1 w1 + d2 w2)`
-    /// (two 32x32-bit products), and the anchor's value through them.
+    /// (two 32x32-bit products; `bits` is [`Self::bits`], passed so the
+    /// common path's shifts are constants), and the anchor's value through
+    /// them.
     #[inline(always)]
-    fn plane(&self, a0: i32, d1: i32, d2: i32) -> Plane {
+    fn plane(&self, bits: u32, a0: i32, d1: i32, d2: i32) -> Plane {
         let g = |w: (i32, i32)| {
-            (d1 as i64 * w.0 as i64 + d2 as i64 * w.1 as i64 + (1 << (W_BITS - 1))) >> W_BITS
+            (d1 as i64 * w.0 as i64 + d2 as i64 * w.1 as i64 + (1 << (bits - 1))) >> bits
         };
         let (gx, gy) = (g(self.wx), g(self.wy));
         // The anchor's value through the steps (as the exact contract's
@@ -212,6 +262,36 @@ impl<const N: usize, C: TileConfig> Tile<N, C> {
             )
         });
         self.draw_valid(&Command::Triangle { v, state: *st }, &[]);
+    }
+
+    /// The colour lanes' and depth's planes of the triangle `v` (vertex 0
+    /// then the other two in the orientation's order) through `rc`, whose
+    /// steps have `bits` fraction bits (a constant on the common path, so
+    /// its shifts are).
+    #[inline(always)]
+    fn planes(rc: &Recip, bits: u32, v: [&MeshVertex; 3]) -> ([Plane; 4], Plane) {
+        let lanes = |k: usize| C::Format::lanes_from_rgb8(v[k].rgb);
+        let (l0, l1, l2) = (lanes(0), lanes(1), lanes(2));
+        let mut cp = [Plane { c: 0, gx: 0, gy: 0 }; 4];
+        for (i, p) in cp
+            .iter_mut()
+            .enumerate()
+            .take(<C::Format as PixelFormat>::Lanes::LEN)
+        {
+            let c0 = l0.lane(i);
+            *p = rc.plane(bits, c0, l1.lane(i) - c0, l2.lane(i) - c0);
+        }
+        let zl = |k: usize| (v[k].z as i32) << Z_FRAC;
+        let zp = rc.plane(bits, zl(0), zl(1) - zl(0), zl(2) - zl(0));
+        (cp, zp)
+    }
+
+    /// [`Self::planes`] of a sliver (fewer fraction bits, a shift by a
+    /// variable), out of line.
+    #[inline(never)]
+    #[cold]
+    fn sliver_planes(rc: &Recip, v: [&MeshVertex; 3]) -> ([Plane; 4], Plane) {
+        Self::planes(rc, rc.bits, v)
     }
 
     /// Draws the opaque Gouraud triangle `v` under the plane contract
@@ -288,25 +368,16 @@ impl<const N: usize, C: TileConfig> Tile<N, C> {
             (bx0 << SUBPIXEL_BITS) + half - p0.0,
             (by0 << SUBPIXEL_BITS) + half - p0.1,
         );
-        let Some(rc) = Recip::new(area2, (e[1].a, e[2].a), (e[1].s, e[2].s), o) else {
+        let extent = ((bx1 - bx0) + (by1 - by0) + 2) as u32;
+        let Some(rc) = Recip::new(area2, (e[1].a, e[2].a), (e[1].s, e[2].s), o, extent) else {
             return false;
         };
-        if !rc.conditioned(((bx1 - bx0) + (by1 - by0) + 2) as u32) {
-            return false;
-        }
-        let lanes = |k: usize| C::Format::lanes_from_rgb8(v[k].rgb);
-        let (l0, l1, l2) = (lanes(0), lanes(i1), lanes(i2));
-        let mut cp = [Plane { c: 0, gx: 0, gy: 0 }; 4];
-        for (i, p) in cp
-            .iter_mut()
-            .enumerate()
-            .take(<C::Format as PixelFormat>::Lanes::LEN)
-        {
-            let c0 = l0.lane(i);
-            *p = rc.plane(c0, l1.lane(i) - c0, l2.lane(i) - c0);
-        }
-        let zl = |k: usize| (v[k].z as i32) << Z_FRAC;
-        let zp = rc.plane(zl(0), zl(i1) - zl(0), zl(i2) - zl(0));
+        let ends = [v[0], v[i1], v[i2]];
+        let (cp, zp) = if rc.bits == W_BITS {
+            Self::planes(&rc, W_BITS, ends)
+        } else {
+            Self::sliver_planes(&rc, ends)
+        };
         let dc = <C::Format as PixelFormat>::Lanes::from_fn(|i| cp[i].gx);
         loop {
             if lo < hi {
@@ -321,7 +392,14 @@ impl<const N: usize, C: TileConfig> Tile<N, C> {
                     z: at(&zp),
                     dz: zp.gx,
                 };
-                self.span_with::<false>((cx0 + lo) as i64, py as i64, (hi - lo) as i64, s, dc, st);
+                self.span_with::<false, true>(
+                    (cx0 + lo) as i64,
+                    py as i64,
+                    (hi - lo) as i64,
+                    s,
+                    dc,
+                    st,
+                );
             }
             if py == cy1 {
                 return true;
@@ -364,6 +442,9 @@ mod tests {
     /// A random triangle over a `SIDE` square and a little beyond: most
     /// small (a mesh's), some tiny or slivers, some large.
     fn triangle(next: &mut impl FnMut() -> u64) -> [MeshVertex; 3] {
+        if next() % 8 == 0 {
+            return sliver(next);
+        }
         let span = match next() % 8 {
             0 => 16 * 4,
             1 => 16 * 200,
@@ -377,6 +458,42 @@ mod tests {
             rgb: [next() as u8, next() as u8, next() as u8],
             code: 0,
         })
+    }
+
+    /// A sliver: a long edge and a third vertex a fraction of a pixel to
+    /// its side, so a weight changes by 2 or more a pixel or a row.
+    fn sliver(next: &mut impl FnMut() -> u64) -> [MeshVertex; 3] {
+        let mut p = |lim: u64| (next() % lim) as i32;
+        let (x0, y0) = (p(16 * 40), p(16 * 40));
+        let (x1, y1) = (x0 + p(16 * 24) - 16 * 12, y0 + p(16 * 24) - 16 * 12);
+        let t = p(17);
+        let (x2, y2) = (
+            x0 + (x1 - x0) * t / 16 + p(9) - 4,
+            y0 + (y1 - y0) * t / 16 + p(9) - 4,
+        );
+        let mut v = [(x0, y0), (x1, y1), (x2, y2)].map(|(x, y)| MeshVertex {
+            x,
+            y,
+            z: 0,
+            rgb: [0; 3],
+            code: 0,
+        });
+        for v in &mut v {
+            v.z = (next() % 60000) as u16;
+            v.rgb = [next() as u8, next() as u8, next() as u8];
+        }
+        v
+    }
+
+    /// Whether `v` is a sliver the plane contract draws with fewer
+    /// fraction bits ([`Recip::sliver`]): an edge step of at least twice
+    /// the doubled area.
+    fn is_sliver(v: &[MeshVertex; 3]) -> bool {
+        let (dx1, dy1) = (v[1].x - v[0].x, v[1].y - v[0].y);
+        let (dx2, dy2) = (v[2].x - v[0].x, v[2].y - v[0].y);
+        let area2 = (dx1 * dy2 - dy1 * dx2).abs();
+        let k = [dx1, dy1, dx2, dy2].map(|d| d.abs() << SUBPIXEL_BITS);
+        area2 > 0 && k.iter().any(|&k| k >= 2 * area2)
     }
 
     fn vertices(v: &[MeshVertex; 3]) -> [Vertex; 3] {
@@ -418,7 +535,7 @@ mod tests {
         let mut next = xorshift(0x9e37_79b9_7f4a_7c15);
         let whole = Rect::new(0, 0, SIDE, SIDE);
         let (mut fast_tris, mut exact_tris, mut fragments, mut differ) = (0, 0, 0u32, 0u32);
-        let mut zdiffer = 0u32;
+        let (mut zdiffer, mut slivers) = (0u32, 0u32);
         let mut worst = 0.0f64;
         for _ in 0..3000 {
             let v = triangle(&mut next);
@@ -434,6 +551,7 @@ mod tests {
             let mut fast: Tile<CAP, Fast> = Tile::new();
             fast.begin(whole, &Clear::default()).unwrap();
             let in_domain = fast.plane_triangle([&v[0], &v[1], &v[2]], &st);
+            slivers += (in_domain && is_sliver(&v)) as u32;
             if !in_domain {
                 exact_tris += 1;
                 fast.draw(&Command::Triangle {
@@ -499,7 +617,8 @@ mod tests {
         {
             extern crate std;
             std::println!(
-                "plane contract: {fast_tris} triangles in its domain, {exact_tris} outside; \
+                "plane contract: {fast_tris} triangles in its domain ({slivers} slivers), \
+                 {exact_tris} outside; \
                  {differ} colours and {zdiffer} depths of {fragments} fragments differ from \
                  the exact contract's; \
                  worst error {worst:.4} LSB"
@@ -508,8 +627,8 @@ mod tests {
         // Most triangles are in the domain; some fragments differ by
         // rounding, few.
         assert!(
-            fast_tris > 700 && exact_tris > 300,
-            "{fast_tris} / {exact_tris}"
+            fast_tris > 700 && exact_tris > 300 && slivers > 100,
+            "{fast_tris} / {exact_tris}, {slivers} slivers"
         );
         assert!(differ * 100 < fragments, "{differ} of {fragments} differ");
         assert!(
