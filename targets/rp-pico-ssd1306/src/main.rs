@@ -10,49 +10,12 @@
 #![no_std]
 #![no_main]
 
-use embedded_graphics::{
-    mono_font::{ascii::FONT_6X10, MonoTextStyle},
-    pixelcolor::BinaryColor,
-    prelude::*,
-    text::Text,
-};
-use micromath::F32Ext;
 use rp_pico::entry;
 use rp_pico::hal::{self, fugit::RateExtU32, gpio, pac, Timer};
 use ssd1306::{prelude::*, I2CDisplayInterface, Ssd1306};
 use tilerast::prelude::*;
+use tilerast_fw::examples::oled::{self, label, scene, Oled};
 use {defmt_rtt as _, panic_probe as _};
-
-/// The renderer: the whole 128x64 screen as one tile of the SSD1306
-/// preset (1 KB), bins and state with their defaults.
-type Oled = Renderer<Ssd1306Config, { groups(128, 64) }>;
-
-/// A spinning shaded triangle over a grey ramp (the dither shows both).
-fn scene(list: &mut DisplayList<3>, angle: f32) -> Result<(), Error> {
-    list.clear();
-    let v = |x: f32, y: f32, l: u8| Vertex::try_from_f32(x, y, 0, Rgb::new(l, l, l));
-    list.push(Command::triangle([
-        v(0.0, 64.0, 0)?,
-        v(128.0, 64.0, 90)?,
-        v(0.0, 40.0, 30)?,
-    ]))?;
-    list.push(Command::triangle([
-        v(128.0, 64.0, 90)?,
-        v(128.0, 40.0, 60)?,
-        v(0.0, 40.0, 30)?,
-    ]))?;
-    // Setup-time float math (soft-float on the M0+), never per pixel.
-    let corner = |k: f32| {
-        let a = angle + k * 2.094_395;
-        (64.0 + 28.0 * a.cos(), 34.0 + 28.0 * a.sin())
-    };
-    let [(x0, y0), (x1, y1), (x2, y2)] = [corner(0.0), corner(1.0), corner(2.0)];
-    list.push(Command::triangle([
-        v(x0, y0, 255)?,
-        v(x1, y1, 120)?,
-        v(x2, y2, 20)?,
-    ]))
-}
 
 #[entry]
 fn main() -> ! {
@@ -97,9 +60,8 @@ fn main() -> ! {
     defmt::info!("SSD1306 ready; {} bytes of renderer", Oled::BYTES);
 
     // One tile covers the screen.
-    let mut renderer = Oled::new(128, 64).unwrap();
+    let mut renderer = oled::renderer().unwrap();
     let mut list: DisplayList<3> = DisplayList::new();
-    let text = MonoTextStyle::new(&FONT_6X10, BinaryColor::On);
     let mut angle = 0.0f32;
     let mut frames = 0u32;
     let mut since = timer.get_counter();
@@ -109,7 +71,7 @@ fn main() -> ! {
             Ok(()) => {
                 let drawn = renderer.render(&list, |t| {
                     // The tile's own errors are `Infallible`.
-                    let Ok(_) = Text::new("tilerast", Point::new(2, 9), text).draw(t);
+                    let Ok(()) = label(t);
                     t.flush(&mut display)
                 });
                 match drawn {
@@ -129,6 +91,6 @@ fn main() -> ! {
             defmt::info!("{} frames/s", frames as u64 * 1_000_000 / us);
             (frames, since) = (0, now);
         }
-        angle += 0.05;
+        angle += oled::STEP;
     }
 }

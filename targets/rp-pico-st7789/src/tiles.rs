@@ -16,14 +16,8 @@ use embedded_hal::spi::SpiBus;
 use hal::dma::{single_buffer, Channel, CH0};
 use tilerast::geometry::{Angle, Mesh, Real, Scene, VertexSlot, CUBE_BYTES};
 use tilerast::prelude::*;
-use tilerast_fw::panel::{camera, turn, window};
-
-/// The renderer: 60x40-pixel tiles of the ST7789 preset (RGB565 + 16-bit
-/// Z + 4x4 dither), bins and state with their defaults.
-type Panel = Renderer<St7789Config, { groups(60, 40) }>;
-
-/// Bytes of one tile as the panel takes it.
-const TILE_BYTES: usize = 60 * 40 * 2;
+use tilerast_fw::examples::cube::{self, camera, turn, Panel, TILE_BYTES};
+use tilerast_fw::panel::window;
 /// One ping-pong buffer.
 type Buf = &'static mut [u8; TILE_BYTES];
 
@@ -48,12 +42,7 @@ where
     defmt::info!("ST7789 ready; {} bytes of renderer", Panel::BYTES);
 
     // 60x40 tiles (a window the panel takes per DMA transfer).
-    let mut renderer = Panel::with_tile(240, 240, 60, 40)
-        .unwrap()
-        .with_clear(Clear {
-            color: Rgb::new(8, 8, 16),
-            ..Clear::default()
-        });
+    let mut renderer = cube::renderer().unwrap();
     let mut mesh_buf = [0u8; CUBE_BYTES];
     let cube = Mesh::cube(&mut mesh_buf).unwrap();
     let mut slots = [VertexSlot::EMPTY; 24];
@@ -103,6 +92,6 @@ where
             defmt::info!("{} frames/s", frames as u64 * 1_000_000 / us);
             (frames, since) = (0, now);
         }
-        angle = angle.add(Angle::degrees(3));
+        angle = angle.add(cube::STEP);
     }
 }
