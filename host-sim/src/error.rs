@@ -146,3 +146,17 @@ impl Error {
 
 /// The simulator's results.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// A number as a person reads it: `1e300`, not 300 digits.
+pub(crate) struct Readable(pub(crate) f64);
+
+impl std::fmt::Display for Readable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let v = self.0;
+        if v.is_finite() && v.abs() >= 1e7 {
+            write!(f, "{v:e}")
+        } else {
+            write!(f, "{v}")
+        }
+    }
+}

@@ -243,6 +243,8 @@ pub fn parse(src: &[u8], file: &str, dir: Option<&Path>, limits: &Limits) -> Res
     let mut cur = Builder::new(String::new(), None);
     let mut names: HashMap<String, usize> = HashMap::new();
     let mut bad_used = 0usize;
+    // The first line that is not text, and how many there are.
+    let mut junk: Option<(usize, usize)> = None;
     for l in lines(src, file, limits) {
         let (n, line) = l?;
         let at = |col: usize| Location::at(file, n, Some(col));
@@ -389,10 +391,28 @@ pub fn parse(src: &[u8], file: &str, dir: Option<&Path>, limits: &Limits) -> Res
                     }
                 }
             }
-            _ => {}
+            // Statements OBJ readers do not know are skipped, as the
+            // format says; bytes that are not text are reported, with the
+            // first line they are on.
+            _ => {
+                if line
+                    .chars()
+                    .any(|c| c == char::REPLACEMENT_CHARACTER || (c.is_control() && c != '\t'))
+                {
+                    junk.get_or_insert((n, 0)).1 += 1;
+                }
+            }
         }
     }
     cur.finish(&mut obj.models);
+    if let Some((first, count)) = junk {
+        obj.warnings.push(format!(
+            "{}: not text (bytes that are not UTF-8, or control characters); {count} such \
+             line{} skipped",
+            Location::at(file, first, None),
+            if count == 1 { "" } else { "s" }
+        ));
+    }
     if bad_used > 0 {
         obj.warnings.push(format!(
             "{file}: {bad_used} faces or lines dropped for a vertex that is not finite"

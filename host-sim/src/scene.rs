@@ -430,7 +430,14 @@ fn fix<T: tilerast::fixed::traits::Fixed>(v: f64, what: &str) -> Result<T, Strin
     if !v.is_finite() {
         return Err(format!("{what} is not finite"));
     }
-    T::checked_from_num(v).ok_or_else(|| format!("{what} = {v} is out of range"))
+    T::checked_from_num(v).ok_or_else(|| {
+        format!(
+            "{what} = {} is out of range ({} to {})",
+            crate::error::Readable(v),
+            T::MIN,
+            T::MAX
+        )
+    })
 }
 
 fn state(window: u8, mask: Option<u32>) -> State {

@@ -20,7 +20,7 @@
 //! ambient = 0.2
 //! ```
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Readable, Result};
 use crate::image::Image;
 use crate::render::{copy_tile, frame_and_tile, Config, FormatKind, Rendered};
 use serde::Deserialize;
@@ -59,20 +59,6 @@ fn read_all(
         }
     }
     Ok(())
-}
-
-/// A number as a person reads it: `1e300`, not 300 digits.
-struct Readable(f64);
-
-impl std::fmt::Display for Readable {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let v = self.0;
-        if v.is_finite() && v.abs() >= 1e7 {
-            write!(f, "{v:e}")
-        } else {
-            write!(f, "{v}")
-        }
-    }
 }
 
 fn made_side(n: u16) -> Result<()> {
@@ -293,6 +279,19 @@ impl VolumeData {
     /// [`VolumeData::load_raw`] of at most `max_bytes`, checked before the
     /// file is read.
     pub fn load_raw_within(path: &Path, dims: [u16; 3], max_bytes: u64) -> Result<Self> {
+        let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+        Self::read_raw(std::io::BufReader::new(file), path, dims, max_bytes)
+    }
+
+    /// [`VolumeData::load_raw_within`] from `src`, named `path` in
+    /// messages: `dims` are checked against `max_bytes` before a byte is
+    /// read, then exactly the bytes they declare are read.
+    pub fn read_raw(
+        mut src: impl std::io::Read,
+        path: &Path,
+        dims: [u16; 3],
+        max_bytes: u64,
+    ) -> Result<Self> {
         let bad = |m: String| Error::Unsupported(format!("{}: {m}", path.display()));
         let side = 2..=tilerast::volume::MAX_VOLUME_SIDE;
         if let Some(d) = dims.iter().find(|d| !side.contains(*d)) {
@@ -308,9 +307,8 @@ impl VolumeData {
                 dims[0], dims[1], dims[2]
             )));
         }
-        let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
         let mut d = vec![0u8; n as usize];
-        read_all(&mut std::io::BufReader::new(file), &mut d).map_err(|(e, got)| {
+        read_all(&mut src, &mut d).map_err(|(e, got)| {
             if e.kind() == std::io::ErrorKind::UnexpectedEof {
                 bad(format!(
                     "the file ends early: {got} of the {n} bytes dims declare"
@@ -534,13 +532,37 @@ impl VolumeScene {
         };
         let transfer = transfer(&spec.transfer)?;
         if !spec.fov.is_finite() || !(1.0..=170.0).contains(&spec.fov) {
-            return Err(format!("fov = {} must be 1..=170 degrees", spec.fov));
+            return Err(format!(
+                "fov = {} must be 1..=170 degrees",
+                Readable(spec.fov)
+            ));
         }
-        Ok(VolumeScene {
+        // The camera and the lights are checked here, where the scene
+        // file's name and line are known, not when the frame is drawn.
+        let finite = |name: &str, v: &[f64]| match v.iter().find(|x| !x.is_finite()) {
+            Some(x) => Err(format!("{name} has {x}: every number must be finite")),
+            None => Ok(()),
+        };
+        finite("eye", &spec.eye)?;
+        finite("rotate", &spec.rotate)?;
+        finite("ambient", &[spec.ambient])?;
+        for l in &spec.lights {
+            finite("a light", l)?;
+        }
+        let scene = VolumeScene {
             data,
             transfer,
             spec,
-        })
+        };
+        let s = &scene.spec;
+        let eye = s.eye.map(Readable);
+        let cam = scene.camera(64, 64).map_err(|e| {
+            format!("eye = [{}, {}, {}]: {e} (it must be away from the origin and not straight above it)", eye[0], eye[1], eye[2])
+        })?;
+        scene
+            .lights(&cam[0], &s.lights)
+            .map_err(|e| format!("lights: {e} (each needs a direction that is not zero)"))?;
+        Ok(scene)
     }
 
     /// Model, view and projection for a `w x h` screen.

@@ -673,8 +673,27 @@ pub fn png(data: &[u8]) -> bool {
 /// never more than the limit read or allocated; a loaded volume has the
 /// sides it declares (2..=1024) and one density and three normal bytes a
 /// voxel; an error names the file.
+///
+/// The same bytes as a raw volume too
+/// ([`tilerast_sim::volume::VolumeData::read_raw`]): the first
+/// three bytes give its sides (2..=33), the rest are its voxels.
 pub fn nifti(data: &[u8]) -> bool {
     use tilerast_sim::volume::VolumeData;
+    if let [a, b, c, rest @ ..] = data {
+        let dims = [*a, *b, *c].map(|s| (s % 32) as u16 + 2);
+        let raw = std::path::Path::new("fuzz.raw");
+        match VolumeData::read_raw(rest, raw, dims, 1 << 20) {
+            Ok(v) => {
+                let n = dims.iter().map(|&d| d as usize).product::<usize>();
+                assert!(rest.len() >= n);
+                assert_eq!((v.density.len(), v.normals.len()), (n, 3 * n));
+            }
+            Err(e) => {
+                let e = e.to_string();
+                assert!(e.starts_with("fuzz.raw: the file ends early"), "{e}");
+            }
+        }
+    }
     let path = std::path::Path::new("fuzz.nii");
     match VolumeData::read_nifti(data, path, 1 << 20) {
         Ok(v) => {

@@ -41,6 +41,7 @@ pub fn assert_golden(name: &str, img: &Image) {
 pub use tilerast_sim::rng::Rng;
 
 pub mod fuzz;
+pub mod memory;
 
 /// Two overlapping window claims (IDs 1 and 2) and then `n` random
 /// commands ([`random_command`]) in windows 0..3.

@@ -8,6 +8,10 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 use tilerast_sim::volume::VolumeData;
 use tilerast_sim::Image;
+use tilerast_tests::memory::{peak_of, Counting};
+
+#[global_allocator]
+static A: Counting = Counting;
 
 fn dir(name: &str) -> PathBuf {
     let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
@@ -223,4 +227,106 @@ fn a_raw_volume_reads_only_what_its_dims_declare() {
         e.contains("short.raw: the file ends early: 10 of the 64 bytes"),
         "{e}"
     );
+}
+
+/// A scene file with a `[volume]` of `keys` (the procedural sphere).
+fn volume_scene(name: &str, keys: &str) -> PathBuf {
+    let d = dir("volume_camera");
+    let p = d.join(name);
+    std::fs::write(
+        &p,
+        format!(
+            "[screen]\nwidth = 32\nheight = 32\nformat = \"rgb565\"\n\n\
+             [volume]\nsource = \"sphere\"\nsize = 8\nslices = 8\n\
+             transfer = [[0, 0, 0, 0, 0], [255, 255, 255, 255, 255]]\n{keys}\n"
+        ),
+    )
+    .unwrap();
+    p
+}
+
+#[test]
+fn volume_camera_and_light_errors_name_the_scene_file_and_line() {
+    for (name, keys, says) in [
+        ("nan_eye.toml", "eye = [nan, 0, 2]", "eye has NaN"),
+        ("inf_rotate.toml", "rotate = [0, inf, 0]", "rotate has inf"),
+        ("origin_eye.toml", "eye = [0, 0, 0]", "eye = [0, 0, 0]"),
+        ("above_eye.toml", "eye = [0, 3, 0]", "eye = [0, 3, 0]"),
+        ("huge_eye.toml", "eye = [0, 0, 1e300]", "1e300"),
+        ("dark_light.toml", "lights = [[0, 0, 0, 1]]", "lights"),
+        (
+            "nan_light.toml",
+            "lights = [[0, nan, 1, 1]]",
+            "a light has NaN",
+        ),
+    ] {
+        let e = tilerast_sim::Scene::load(volume_scene(name, keys))
+            .err()
+            .unwrap_or_else(|| panic!("{name}: {keys} was accepted"))
+            .to_string();
+        // `file:line`: the `[volume]` table's line.
+        assert!(e.contains(&format!("{name}:6")), "{name}: {e}");
+        assert!(e.contains(says), "{name}: {e}");
+        assert!(e.len() < 300, "{name}: {e}");
+    }
+}
+
+#[test]
+fn out_of_range_numbers_print_readably() {
+    let e = tilerast_sim::Scene::parse_with(
+        "[screen]\nwidth = 32\nheight = 32\nformat = \"rgb565\"\n\n[[command]]\nkind = \"span\"\nx = 0\ny = 0\n\
+         len = 4\nrgb = [0, 0, 0]\ndrgb = [1e300, 0, 0]\n",
+        Path::new("."),
+        &tilerast_sim::Limits::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("drgb = 1e300 is out of range"), "{e}");
+    assert!(e.len() < 200, "{e}");
+}
+
+#[test]
+fn binary_junk_in_an_obj_is_reported_with_its_line() {
+    let mut src = vec![0xFF, 0xFE, 0x00, 0x01, b'\n'];
+    src.extend_from_slice(b"v 0 0 0\nv 1 0 0\nv 0 1 0\n\x07\x08junk\nf 1 2 3\n");
+    let o =
+        tilerast_sim::obj::parse(&src, "junk.obj", None, &tilerast_sim::Limits::default()).unwrap();
+    assert_eq!(o.models[0].triangles.len(), 1);
+    let w = o.warnings.join("\n");
+    assert!(w.contains("junk.obj:1: not text"), "{w}");
+    assert!(w.contains("2 such lines skipped"), "{w}");
+}
+
+/// The volume readers hold at most what the limit lets through: a gzip
+/// bomb and an endless raw file under a 1 MiB limit allocate a few
+/// kilobytes, and a volume that fits allocates its voxels' planes (density
+/// and three normal bytes a voxel) and the data once, measured by a
+/// counting allocator.
+#[test]
+fn volume_readers_allocate_within_their_limit() {
+    const LIMIT: u64 = 1 << 20;
+    let d = dir("volume_memory");
+    // 256^3 bytes declared (16 MiB), 16 MiB of zeros compressed (~16 KB).
+    let mut bomb = nifti_header([256, 256, 256], 2, 8, 352.0);
+    bomb.extend(std::iter::repeat_n(0u8, 1 << 24));
+    let bomb = write(&d, "bomb.nii.gz", &gzip(&bomb));
+    let (r, peak) = peak_of(|| VolumeData::load_nifti_within(&bomb, LIMIT));
+    assert!(r.is_err());
+    assert!(peak < 256 << 10, "the bomb: {peak} bytes");
+    let (r, peak) =
+        peak_of(|| VolumeData::load_raw_within(Path::new("/dev/zero"), [256; 3], LIMIT));
+    assert!(r.is_err());
+    assert!(peak < 64 << 10, "/dev/zero: {peak} bytes");
+    // 64^3 = 256 KiB of voxels: within the limit.
+    let mut fits = nifti_header([64, 64, 64], 2, 8, 352.0);
+    fits.extend((0..64 * 64 * 64).map(|i| (i % 251) as u8));
+    let fits = write(&d, "fits.nii.gz", &gzip(&fits));
+    let (v, peak) = peak_of(|| VolumeData::load_nifti_within(&fits, LIMIT).unwrap());
+    let voxels = 64 * 64 * 64;
+    assert_eq!(v.density.len(), voxels);
+    assert!(peak <= 8 * voxels + (256 << 10), "64^3 NIfTI: {peak} bytes");
+    let (v, peak) =
+        peak_of(|| VolumeData::load_raw_within(Path::new("/dev/zero"), [64; 3], LIMIT).unwrap());
+    assert_eq!(v.density.len(), voxels);
+    assert!(peak <= 8 * voxels + (256 << 10), "64^3 raw: {peak} bytes");
 }

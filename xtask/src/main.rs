@@ -754,7 +754,6 @@ fn fuzz(args: &[String]) -> Result<(), String> {
     };
     let time = format!("-max_total_time={seconds}");
     std::fs::create_dir_all("target/fuzz-logs").map_err(|e| e.to_string())?;
-    let mut rows = fuzz_report_rows();
     let mut found = vec![];
     for t in targets {
         let (corpus, seeds) = (format!("corpus/{t}"), format!("seeds/{t}"));
@@ -786,14 +785,14 @@ fn fuzz(args: &[String]) -> Result<(), String> {
             }
             found.push(format!("`{t}`: {}", row.findings.join(", ")));
         }
-        // Keep what adds an edge (not a hit count): a corpus small enough
+        // The run's figures first (a failed minimisation keeps them), then
+        // the corpus kept: what adds an edge (not a hit count), small enough
         // for the repository and for the stable replay in `cargo xtask test`.
+        write_fuzz_row(t, &row)?;
         fuzz(&["cmin", "-O", "-a", t, &corpus, "--", "-use_counters=0"])?;
         row.kept = std::fs::read_dir(format!("fuzz/{corpus}")).map_or(0, |d| d.count());
         eprintln!("xtask: {}", row.line());
-        rows.retain(|(name, _)| name != t);
-        rows.push((t.to_string(), row.line()));
-        write_fuzz_report(&rows)?;
+        write_fuzz_row(t, &row)?;
     }
     if found.is_empty() {
         Ok(())
@@ -885,8 +884,12 @@ fn fuzz_report_rows() -> Vec<(String, String)> {
         .collect()
 }
 
-fn write_fuzz_report(rows: &[(String, String)]) -> Result<(), String> {
-    let mut rows = rows.to_vec();
+/// Replaces target `t`'s row of `reports/fuzz.md` (read again each time:
+/// campaigns of different targets may run at once).
+fn write_fuzz_row(t: &str, row: &FuzzRow) -> Result<(), String> {
+    let mut rows = fuzz_report_rows();
+    rows.retain(|(name, _)| name != t);
+    rows.push((t.to_string(), row.line()));
     rows.sort_by_key(|(t, _)| FUZZ_TARGETS.iter().position(|f| f == t));
     let mut out = String::from(
         "# Fuzzing campaigns\n\n\
