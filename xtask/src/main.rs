@@ -641,35 +641,17 @@ fn report() -> Result<(), String> {
     );
     // The RP2040 examples on the emulated board: `reports/rp2040.md`.
     ensure_rp2040()?;
-    let rp2040 = path.with_file_name("rp2040.md");
-    run_env(
-        &[("TILERAST_RP2040_REPORT", &rp2040.to_string_lossy())],
-        "cargo",
-        &[
-            "test",
-            "-p",
-            "tilerast-tests",
-            "--test",
-            "rp2040",
-            "--",
-            "--include-ignored",
-        ],
+    report_test(
+        "rp2040",
+        "TILERAST_RP2040_REPORT",
+        &path.with_file_name("rp2040.md"),
     )?;
     // The same workloads' instructions function by function (QEMU with
     // the segment profiler): `reports/profile.md`.
-    let profile = path.with_file_name("profile.md");
-    run_env(
-        &[("TILERAST_PROFILE", &profile.to_string_lossy())],
-        "cargo",
-        &[
-            "test",
-            "-p",
-            "tilerast-tests",
-            "--test",
-            "profile",
-            "--",
-            "--include-ignored",
-        ],
+    report_test(
+        "profile",
+        "TILERAST_PROFILE",
+        &path.with_file_name("profile.md"),
     )?;
     // Host frames (tiled, one tile, f64 reference) and fills against the
     // peers, timed in one run: `reports/frames.md`; then volume rendering,
@@ -688,6 +670,24 @@ fn report() -> Result<(), String> {
         run("cargo", &args)?;
     }
     Ok(())
+}
+
+/// Runs integration test `test` (its ignored tests too) with `var` naming
+/// the report file it writes.
+fn report_test(test: &str, var: &str, file: &std::path::Path) -> Result<(), String> {
+    run_env(
+        &[(var, &file.to_string_lossy())],
+        "cargo",
+        &[
+            "test",
+            "-p",
+            "tilerast-tests",
+            "--test",
+            test,
+            "--",
+            "--include-ignored",
+        ],
+    )
 }
 
 fn demo() -> Result<(), String> {

@@ -1152,30 +1152,15 @@ where
         // bits reach the dither.
         let (xs, ys) = (x as u32, y as u32);
         let n = n as usize;
-        if QUAD {
-            self.span_masked::<{ OPAQUE | QUAD_STEP }>(
-                idx,
-                xs,
-                ys,
-                n,
-                (s, ddc),
-                (0, 0),
-                st.wid,
-                mask,
-            );
-        } else if KNOWN {
-            self.span_masked::<{ OPAQUE | IN_RANGE }>(
-                idx,
-                xs,
-                ys,
-                n,
-                (s, ddc),
-                (0, 0),
-                st.wid,
-                mask,
-            );
-        } else {
-            self.span_masked::<OPAQUE>(idx, xs, ys, n, (s, ddc), (0, 0), st.wid, mask);
+        let (q, w) = ((s, ddc), st.wid);
+        match (QUAD, KNOWN) {
+            (true, _) => {
+                self.span_masked::<{ OPAQUE | QUAD_STEP }>(idx, xs, ys, n, q, (0, 0), w, mask)
+            }
+            (false, true) => {
+                self.span_masked::<{ OPAQUE | IN_RANGE }>(idx, xs, ys, n, q, (0, 0), w, mask)
+            }
+            (false, false) => self.span_masked::<OPAQUE>(idx, xs, ys, n, q, (0, 0), w, mask),
         }
     }
 
