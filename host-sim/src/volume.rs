@@ -82,18 +82,43 @@ pub struct VolumeData {
     pub spacing: [u16; 3],
     /// [`Volume::compute_normals`] of the densities.
     pub normals: Vec<u8>,
+    /// [`Volume::compute_bricks`] of the densities, bricks of
+    /// `2^brick_shift` cells a side.
+    pub bricks: Vec<u8>,
+    /// The bricks' side, as a shift ([`BRICK_SHIFT`] unless
+    /// [`VolumeData::with_brick_shift`] chose another).
+    pub brick_shift: u32,
 }
+
+/// The simulator's empty-space bricks: 4 cells a side (2 bytes per 64
+/// voxels; `volume-report` measures the other sides).
+pub const BRICK_SHIFT: u32 = 2;
 
 impl VolumeData {
     fn with_normals(density: Vec<u8>, dims: [u16; 3], spacing: [u16; 3]) -> Result<Self> {
         let mut normals = vec![0u8; 3 * density.len()];
-        Volume::new(&density, dims)?.compute_normals(&mut normals)?;
+        let mut bricks = vec![0u8; tilerast::volume::brick_bytes(dims, BRICK_SHIFT)];
+        let v = Volume::new(&density, dims)?;
+        v.compute_normals(&mut normals)?;
+        v.compute_bricks(BRICK_SHIFT, &mut bricks)?;
         Ok(VolumeData {
             density,
             dims,
             spacing,
             normals,
+            bricks,
+            brick_shift: BRICK_SHIFT,
         })
+    }
+
+    /// The same data with bricks of `2^shift` cells a side
+    /// ([`tilerast::volume::BRICK_SHIFTS`]).
+    pub fn with_brick_shift(mut self, shift: u32) -> Result<Self> {
+        let mut bricks = vec![0u8; tilerast::volume::brick_bytes(self.dims, shift)];
+        Volume::new(&self.density, self.dims)?.compute_bricks(shift, &mut bricks)?;
+        self.bricks = bricks;
+        self.brick_shift = shift;
+        Ok(self)
     }
 
     /// The seed's "small sphere", `n^3` ([`tilerast::volume::sphere`]);
@@ -362,14 +387,17 @@ impl VolumeData {
         Self::with_normals(out, [n; 3], spacing)
     }
 
-    /// The core's view of it, normals precomputed or on the fly.
-    pub fn volume(&self, quantized: bool) -> Result<Volume<'_>> {
-        let v = Volume::new(&self.density, self.dims)?.with_spacing(self.spacing)?;
-        Ok(if quantized {
-            v.with_normals(&self.normals)?
-        } else {
-            v
-        })
+    /// The core's view of it, normals precomputed or on the fly, skipping
+    /// transparent bricks or not (the same image either way).
+    pub fn volume(&self, quantized: bool, skip: bool) -> Result<Volume<'_>> {
+        let mut v = Volume::new(&self.density, self.dims)?.with_spacing(self.spacing)?;
+        if quantized {
+            v = v.with_normals(&self.normals)?;
+        }
+        if skip {
+            v = v.with_bricks(&self.bricks, self.brick_shift)?;
+        }
+        Ok(v)
     }
 }
 
@@ -425,6 +453,10 @@ pub struct VolumeSpec {
     /// Compositing.
     #[serde(default)]
     pub mode: ModeKind,
+    /// Skip the samples of bricks the transfer function makes transparent
+    /// (empty-space skipping: the same image, fewer fetches).
+    #[serde(default = "default_true")]
+    pub skip_empty: bool,
     /// Output.
     #[serde(default)]
     pub view: ViewKind,
@@ -459,6 +491,7 @@ impl VolumeSpec {
             slices: default_slices(),
             normals: NormalsKind::Quantized,
             mode: ModeKind::Normal,
+            skip_empty: true,
             view: ViewKind::Shaded,
             transfer,
             eye: default_eye(),
@@ -468,6 +501,10 @@ impl VolumeSpec {
             ambient: default_ambient(),
         }
     }
+}
+
+fn default_true() -> bool {
+    true
 }
 
 fn default_slices() -> u16 {
@@ -583,13 +620,14 @@ impl VolumeScene {
     /// The volume sliced for a camera on a `w x h` screen.
     pub fn view(
         &self,
-        normals: NormalsKind,
+        run: VolumeRun,
         [model, view, proj]: [Mat4<f32>; 3],
         w: u16,
         h: u16,
-        slices: u16,
     ) -> Result<Box<VolumeView<'_, MAX_SLICES>>> {
-        let vol = self.data.volume(normals == NormalsKind::Quantized)?;
+        let vol = self
+            .data
+            .volume(run.normals == NormalsKind::Quantized, run.skip_empty)?;
         let screen = Rect::new(0, 0, w as u32, h as u32);
         Ok(Box::new(VolumeView::new(
             vol,
@@ -598,7 +636,7 @@ impl VolumeScene {
             &view,
             &proj,
             screen,
-            slices,
+            run.slices,
         )?))
     }
 
@@ -656,6 +694,8 @@ pub struct VolumeRun {
     pub view: ViewKind,
     /// Slices.
     pub slices: u16,
+    /// Empty-space skipping.
+    pub skip_empty: bool,
 }
 
 impl VolumeScene {
@@ -666,6 +706,7 @@ impl VolumeScene {
             normals: self.spec.normals,
             view: self.spec.view,
             slices: self.spec.slices,
+            skip_empty: self.spec.skip_empty,
         }
     }
 }
@@ -710,7 +751,7 @@ where
     let [model, view, proj] = vs.camera(w, h)?;
     let vl = vs.lights(&model, lights)?;
     let t0 = Instant::now();
-    let scene = vs.view(run.normals, [model, view, proj], w, h, run.slices)?;
+    let scene = vs.view(run, [model, view, proj], w, h)?;
     let mut timing = VolumeTiming {
         setup_ns: t0.elapsed().as_nanos() as f64,
         ..Default::default()
@@ -820,7 +861,7 @@ pub fn render_lights(cfg: &Config, vs: &VolumeScene, sets: &[Vec<[f64; 4]>]) -> 
         .iter()
         .map(|l| vs.lights(&model, l))
         .collect::<Result<Vec<_>>>()?;
-    let scene = vs.view(vs.spec.normals, [model, view, proj], w, h, vs.spec.slices)?;
+    let scene = vs.view(vs.run(), [model, view, proj], w, h)?;
     let mut plane: Box<VolumePlane<VOLUME_GROUPS, NormalCell>> = Box::default();
     let n = w as usize * h as usize;
     let mut out: Vec<(Image, Vec<u32>, Vec<u16>)> = sets

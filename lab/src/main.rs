@@ -133,6 +133,9 @@ enum Cmd {
         /// Chart: phase I, phase II and the baseline per dataset.
         #[arg(long, default_value = "reports/volume_chart.png")]
         chart: PathBuf,
+        /// Chart: phase I against the bytes of empty-space bricks.
+        #[arg(long, default_value = "reports/volume_bricks.png")]
+        bricks_chart: PathBuf,
         /// Figures.
         #[arg(long, default_value = "reports/volume.png")]
         image: PathBuf,
@@ -235,14 +238,17 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             runs,
             output,
             chart,
+            bricks_chart,
             image,
         } => {
             use tilerast_lab::volume;
             let sets = volume::datasets(std::path::Path::new("."))?;
             let rows = volume::run(&sets, runs.max(1))?;
+            let bricks = volume::bricks(&sets, runs.max(1))?;
             volume::chart(&rows)?.save_png(&chart)?;
+            volume::brick_chart(&bricks)?.save_png(&bricks_chart)?;
             volume::pictures(&sets)?.save_png(&image)?;
-            let md = volume::report(&rows, runs.max(1), &chart, &image);
+            let md = volume::report(&rows, &bricks, runs.max(1), [&chart, &bricks_chart, &image]);
             std::fs::write(&output, &md).map_err(|e| format!("{}: {e}", output.display()))?;
             print!("{md}");
         }

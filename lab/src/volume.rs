@@ -56,8 +56,10 @@ pub struct Row {
     pub slices: u16,
     /// Normal blending: set-up, phase I, phase II, ms.
     pub setup_ms: f64,
-    /// Phase I, ms.
+    /// Phase I, ms (skipping transparent bricks, the default).
     pub phase1_ms: f64,
+    /// Phase I fetching every sample, ms.
+    pub phase1_all_ms: f64,
     /// Phase II, ms.
     pub phase2_ms: f64,
     /// Per-slice shading, whole frame, ms.
@@ -70,6 +72,8 @@ pub struct Row {
     pub samples: u64,
     /// Blended samples.
     pub composited: u64,
+    /// Samples in transparent bricks, skipped without a fetch.
+    pub skipped: u64,
     /// One colour: largest difference, eq. 8 per pixel, the bound.
     pub mono: (u8, f64, f64),
     /// Colours from the table: largest difference, eq. 8 per pixel.
@@ -148,12 +152,14 @@ fn run_once(
     cfg: &Config,
     mode: ModeKind,
     normals: NormalsKind,
+    skip_empty: bool,
 ) -> Result<(Image, tilerast_sim::volume::VolumeTiming), String> {
     let run = VolumeRun {
         mode,
         normals,
         view: ViewKind::Shaded,
         slices: vs.spec.slices,
+        skip_empty,
     };
     let (r, t) = render(cfg, &[], vs, run, &vs.spec.lights).map_err(|e| e.to_string())?;
     Ok((r.image, t))
@@ -190,8 +196,8 @@ pub fn run(sets: &[(String, VolumeData)], runs: usize) -> Result<Vec<Row>, Strin
         let color = scene(data.clone(), tf, false, side)?;
         for vp in [256u16, 512] {
             let cfg = config(vp);
-            let (mut p1, mut p2, mut su, mut ps, mut fly) =
-                (vec![], vec![], vec![], vec![], vec![]);
+            let (mut p1, mut p2, mut su, mut ps, mut fly, mut p1all) =
+                (vec![], vec![], vec![], vec![], vec![], vec![]);
             let (mut n4, mut ps4) = (vec![], vec![]);
             let mut four = color.clone();
             four.spec.lights = FOUR_LIGHTS.to_vec();
@@ -199,23 +205,44 @@ pub fn run(sets: &[(String, VolumeData)], runs: usize) -> Result<Vec<Row>, Strin
                 |t: &tilerast_sim::volume::VolumeTiming| t.setup_ns + t.phase1_ns + t.phase2_ns;
             let mut stats = Default::default();
             for _ in 0..runs {
-                let (_, t) = run_once(&color, &cfg, ModeKind::Normal, NormalsKind::Quantized)?;
+                let (_, t) =
+                    run_once(&color, &cfg, ModeKind::Normal, NormalsKind::Quantized, true)?;
                 p1.push(t.phase1_ns);
                 p2.push(t.phase2_ns);
                 su.push(t.setup_ns);
                 stats = t.stats;
-                let (_, t) = run_once(&color, &cfg, ModeKind::PerSlice, NormalsKind::Quantized)?;
+                let (_, t) = run_once(
+                    &color,
+                    &cfg,
+                    ModeKind::Normal,
+                    NormalsKind::Quantized,
+                    false,
+                )?;
+                p1all.push(t.phase1_ns);
+                let (_, t) = run_once(
+                    &color,
+                    &cfg,
+                    ModeKind::PerSlice,
+                    NormalsKind::Quantized,
+                    true,
+                )?;
                 ps.push(t.setup_ns + t.phase1_ns + t.phase2_ns);
-                let (_, t) = run_once(&color, &cfg, ModeKind::Normal, NormalsKind::OnTheFly)?;
+                let (_, t) = run_once(&color, &cfg, ModeKind::Normal, NormalsKind::OnTheFly, true)?;
                 fly.push(total(&t));
-                let (_, t) = run_once(&four, &cfg, ModeKind::Normal, NormalsKind::Quantized)?;
+                let (_, t) = run_once(&four, &cfg, ModeKind::Normal, NormalsKind::Quantized, true)?;
                 n4.push(total(&t));
-                let (_, t) = run_once(&four, &cfg, ModeKind::PerSlice, NormalsKind::Quantized)?;
+                let (_, t) = run_once(
+                    &four,
+                    &cfg,
+                    ModeKind::PerSlice,
+                    NormalsKind::Quantized,
+                    true,
+                )?;
                 ps4.push(total(&t));
             }
             let eq = |vs: &VolumeScene| -> Result<(u8, f64), String> {
-                let (a, _) = run_once(vs, &cfg, ModeKind::Normal, NormalsKind::Quantized)?;
-                let (b, _) = run_once(vs, &cfg, ModeKind::PerSlice, NormalsKind::Quantized)?;
+                let (a, _) = run_once(vs, &cfg, ModeKind::Normal, NormalsKind::Quantized, true)?;
+                let (b, _) = run_once(vs, &cfg, ModeKind::PerSlice, NormalsKind::Quantized, true)?;
                 let d = compare(&a, &b).map_err(|e| e.to_string())?;
                 Ok((d.max_abs, d.mse_per_pixel))
             };
@@ -228,12 +255,14 @@ pub fn run(sets: &[(String, VolumeData)], runs: usize) -> Result<Vec<Row>, Strin
                 slices: side,
                 setup_ms: median(su) / 1e6,
                 phase1_ms: median(p1) / 1e6,
+                phase1_all_ms: median(p1all) / 1e6,
                 phase2_ms: median(p2) / 1e6,
                 per_slice_ms: median(ps) / 1e6,
                 on_the_fly_ms: median(fly) / 1e6,
                 four_lights_ms: (median(n4) / 1e6, median(ps4) / 1e6),
                 samples: stats.samples as u64,
                 composited: stats.composited as u64,
+                skipped: stats.skipped as u64,
                 mono: (m.0, m.1, bound),
                 color: eq(&color)?,
             });
@@ -241,6 +270,134 @@ pub fn run(sets: &[(String, VolumeData)], runs: usize) -> Result<Vec<Row>, Strin
         }
     }
     Ok(rows)
+}
+
+/// One brick side of the empty-space skipping sweep.
+#[derive(Debug, Clone)]
+pub struct BrickRow {
+    /// Dataset name.
+    pub name: String,
+    /// Brick side as a shift; `None`: no skipping.
+    pub shift: Option<u32>,
+    /// Bytes of brick ranges.
+    pub bytes: usize,
+    /// Samples taken.
+    pub samples: u64,
+    /// Samples skipped without a fetch.
+    pub skipped: u64,
+    /// Phase I, ms (median).
+    pub phase1_ms: f64,
+    /// Whether the image equals the one without skipping, every byte.
+    pub exact: bool,
+}
+
+/// The brick-side knob: phase I and the samples skipped against the bytes
+/// of brick ranges, for the sphere (64^3) and the MRI (128^3) at 256^2,
+/// every image compared with the one that skips nothing.
+pub fn bricks(sets: &[(String, VolumeData)], runs: usize) -> Result<Vec<BrickRow>, String> {
+    let cfg = config(256);
+    let mut rows = Vec::new();
+    for (name, tf) in [("sphere", "sphere"), ("MRI 128^3", "cortex")] {
+        let data = &sets.iter().find(|s| s.0 == name).ok_or("no dataset")?.1;
+        let side = data.dims[0];
+        let plain = scene(data.clone(), tf, false, side)?;
+        let (want, _) = run_once(
+            &plain,
+            &cfg,
+            ModeKind::Normal,
+            NormalsKind::Quantized,
+            false,
+        )?;
+        for shift in std::iter::once(None).chain(tilerast::volume::BRICK_SHIFTS.map(Some)) {
+            let vs = match shift {
+                Some(k) => scene(
+                    data.clone()
+                        .with_brick_shift(k)
+                        .map_err(|e| e.to_string())?,
+                    tf,
+                    false,
+                    side,
+                )?,
+                None => plain.clone(),
+            };
+            let mut p1 = vec![];
+            let mut last = None;
+            for _ in 0..runs {
+                let (img, t) = run_once(
+                    &vs,
+                    &cfg,
+                    ModeKind::Normal,
+                    NormalsKind::Quantized,
+                    shift.is_some(),
+                )?;
+                p1.push(t.phase1_ns);
+                last = Some((img, t.stats));
+            }
+            let (img, stats) = last.ok_or("no run")?;
+            rows.push(BrickRow {
+                name: name.to_string(),
+                shift,
+                bytes: shift.map_or(0, |k| tilerast::volume::brick_bytes(data.dims, k)),
+                samples: stats.samples as u64,
+                skipped: stats.skipped as u64,
+                phase1_ms: median(p1) / 1e6,
+                exact: img.pixels == want.pixels,
+            });
+        }
+    }
+    Ok(rows)
+}
+
+/// Phase I against the bytes of brick ranges, one line per dataset (the
+/// point at 0 bytes: no skipping).
+pub fn brick_chart(rows: &[BrickRow]) -> Result<Image, String> {
+    plot(700, 380, |area| {
+        let top = rows.iter().map(|r| r.phase1_ms).fold(1.0, f64::max) * 1.15;
+        let most = rows.iter().map(|r| r.bytes).max().unwrap_or(1) as f64;
+        let x = |b: usize| ((b as f64) + 64.0).log2();
+        let mut c = ChartBuilder::on(area)
+            .caption(
+                "Empty-space skipping: phase I ms against brick bytes (256^2)",
+                (SANS, 18),
+            )
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(x(0) - 0.3..x(most as usize) + 0.5, 0.0..top)
+            .map_err(err)?;
+        c.configure_mesh()
+            .x_desc("brick bytes (log; leftmost: no skipping)")
+            .x_label_formatter(&|v| format!("{:.0}", (2f64.powf(*v) - 64.0).max(0.0)))
+            .y_desc("phase I ms")
+            .draw()
+            .map_err(err)?;
+        for (name, color) in [
+            ("sphere", RGBColor(200, 60, 40)),
+            ("MRI 128^3", RGBColor(30, 90, 200)),
+        ] {
+            let pts: Vec<(f64, f64)> = rows
+                .iter()
+                .filter(|r| r.name == name)
+                .map(|r| (x(r.bytes), r.phase1_ms))
+                .collect();
+            c.draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
+                .map_err(err)?
+                .label(name)
+                .legend(move |(x, y)| {
+                    PathElement::new([(x, y), (x + 16, y)], color.stroke_width(2))
+                });
+            c.draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
+                .map_err(err)?;
+        }
+        c.configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .label_font((SANS, 13))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(err)?;
+        Ok(())
+    })
 }
 
 /// A charted figure: name, value, colours at 256^2 and 512^2.
@@ -347,6 +504,7 @@ pub fn pictures(sets: &[(String, VolumeData)]) -> Result<Image, String> {
             normals,
             view,
             slices: vs.spec.slices,
+            skip_empty: true,
         };
         Ok(render(&cfg, &[], vs, run, &vs.spec.lights)
             .map_err(e)?
@@ -384,7 +542,12 @@ pub fn pictures(sets: &[(String, VolumeData)]) -> Result<Image, String> {
 }
 
 /// The Markdown report.
-pub fn report(rows: &[Row], runs: usize, chart: &Path, image: &Path) -> String {
+pub fn report(
+    rows: &[Row],
+    bricks: &[BrickRow],
+    runs: usize,
+    [chart, brick_chart, image]: [&Path; 3],
+) -> String {
     let name = |p: &Path| {
         p.file_name()
             .map(|n| n.to_string_lossy().into_owned())
@@ -398,17 +561,43 @@ pub fn report(rows: &[Row], runs: usize, chart: &Path, image: &Path) -> String {
          real MRI head (`{MRI}`, resampled trilinearly). Instructions on the emulated Cortex-M4 for a 32^3 \
          sphere are in `reports/targets.md`.\n\n\
          ## Table 2 analogue\n\n\
-         | dataset | viewport | slices | samples | blended | set-up ms | phase I ms | phase II ms | total ms | per-slice ms | speed-up | on-the-fly normals ms |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|\n"
+         Both methods skip the samples of 4-cell bricks the transfer function makes transparent \
+         (empty-space skipping: the same image, see below); *phase I, all* fetches every sample.\n\n\
+         | dataset | viewport | slices | samples | skipped | blended | set-up ms | phase I ms | phase I, all ms | phase II ms | total ms | per-slice ms | speed-up | on-the-fly normals ms |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
     );
     for r in rows {
         let total = r.setup_ms + r.phase1_ms + r.phase2_ms;
         md += &format!(
-            "| {} | {}^2 | {} | {} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2}x | {:.2} |\n",
-            r.name, r.viewport, r.slices, r.samples, r.composited, r.setup_ms, r.phase1_ms, r.phase2_ms,
-            total, r.per_slice_ms, r.per_slice_ms / total, r.on_the_fly_ms
+            "| {} | {}^2 | {} | {} | {} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2}x | {:.2} |\n",
+            r.name, r.viewport, r.slices, r.samples, r.skipped, r.composited, r.setup_ms, r.phase1_ms,
+            r.phase1_all_ms, r.phase2_ms, total, r.per_slice_ms, r.per_slice_ms / total, r.on_the_fly_ms
         );
     }
+    md += &format!(
+        "\n## Empty-space skipping: the brick side\n\n\
+         Each brick keeps the density range of the voxels its samples read (two bytes); a sample in a \
+         brick whose whole range has zero opacity is skipped before its fetch. Trilinear interpolation \
+         stays inside its corners' range, so the image is the same, every byte (*exact*). Smaller \
+         bricks skip more and cost more bytes. Normal blending at 256^2, median of {runs}.\n\n\
+         | dataset | brick side | bytes | samples | skipped | skipped % | phase I ms | exact |\n\
+         |---|---|---|---|---|---|---|---|\n"
+    );
+    for b in bricks {
+        md += &format!(
+            "| {} | {} | {} | {} | {} | {:.1}% | {:.2} | {} |\n",
+            b.name,
+            b.shift
+                .map_or("no skipping".to_string(), |k| format!("{} cells", 1 << k)),
+            b.bytes,
+            b.samples,
+            b.skipped,
+            100.0 * b.skipped as f64 / b.samples.max(1) as f64,
+            b.phase1_ms,
+            if b.exact { "yes" } else { "**no**" }
+        );
+    }
+    md += &format!("\n![bricks]({})\n", name(brick_chart));
     md += "\n## Lights, and lighting again\n\n\
          Per-slice shading pays for every light at every blended sample; normal blending pays once a \
          pixel. And new lights (a moving light, Fig. 3) re-run only phase II on the same composite, where \

@@ -52,6 +52,7 @@ fn run(mode: ModeKind, slices: u16) -> VolumeRun {
         normals: NormalsKind::Quantized,
         view: ViewKind::Shaded,
         slices,
+        skip_empty: true,
     }
 }
 
@@ -123,6 +124,63 @@ proptest! {
             .max().unwrap();
         prop_assert!(worst as f64 <= bound, "max difference {} > bound {:.2}", worst, bound);
     }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(cases(16)))]
+
+    /// Empty-space skipping changes no byte: random volumes, rotations,
+    /// transfer thresholds, brick sides and both compositing modes give
+    /// the same image, depth and counts with and without it, and only the
+    /// skipped samples (never a blended one) go unfetched.
+    #[test]
+    fn skipping_empty_bricks_changes_nothing(
+        seed in 0u64..1000,
+        rot in prop::array::uniform3(-180.0f64..180.0),
+        clear in 0.0f64..250.0,
+        shift in tilerast::volume::BRICK_SHIFTS,
+        per_slice in any::<bool>(),
+        slices in 4u16..40,
+    ) {
+        let tf = vec![[clear, 0.0, 200.0, 180.0, 90.0], [(clear + 5.0).min(255.0), 150.0, 90.0, 180.0, 200.0]];
+        let data = blobs(seed, 20).with_brick_shift(shift).unwrap();
+        let lights = vec![[0.3, 0.5, 1.0, 0.8]];
+        let vs = volume_scene(data, spec(tf, rot, lights.clone(), slices));
+        let c = cfg(40, (40, 20));
+        let mode = if per_slice { ModeKind::PerSlice } else { ModeKind::Normal };
+        let on = run(mode, slices);
+        let off = VolumeRun { skip_empty: false, ..on };
+        let (a, ta) = render(&c, &[], &vs, on, &lights).unwrap();
+        let (b, tb) = render(&c, &[], &vs, off, &lights).unwrap();
+        prop_assert_eq!(&a.raw, &b.raw);
+        prop_assert_eq!(&a.depth, &b.depth);
+        prop_assert_eq!(ta.stats.samples, tb.stats.samples);
+        prop_assert_eq!(ta.stats.composited, tb.stats.composited);
+        prop_assert_eq!(tb.stats.skipped, 0);
+        prop_assert!(ta.stats.skipped + ta.stats.composited <= ta.stats.samples);
+    }
+}
+
+/// Skipping skips: on the sphere, most of the transparent samples around
+/// it are never fetched.
+#[test]
+fn skipping_empty_bricks_skips_the_empty_space() {
+    let tf = vec![
+        [100.0, 0.0, 255.0, 120.0, 60.0],
+        [230.0, 200.0, 255.0, 255.0, 255.0],
+    ];
+    let vs = volume_scene(
+        VolumeData::sphere(32).unwrap(),
+        spec(tf, [20.0, 30.0, 0.0], vec![[0.3, 0.5, 1.0, 0.8]], 32),
+    );
+    let l = vs.spec.lights.clone();
+    let (_, t) = render(&cfg(64, (32, 32)), &[], &vs, run(ModeKind::Normal, 32), &l).unwrap();
+    let transparent = t.stats.samples - t.stats.composited;
+    assert!(
+        t.stats.skipped * 2 > transparent,
+        "{} of {transparent} transparent samples skipped",
+        t.stats.skipped
+    );
 }
 
 /// The bound is not vacuous: it stays within a few levels for the

@@ -82,7 +82,7 @@ mod data;
 mod slice;
 mod transfer;
 
-pub use data::{sphere, Normals, Volume, MAX_VOLUME_SIDE, NORMAL_ONE};
+pub use data::{brick_bytes, sphere, Normals, Volume, BRICK_SHIFTS, MAX_VOLUME_SIDE, NORMAL_ONE};
 pub use slice::Slice;
 pub use transfer::{TfPoint, Transfer};
 
@@ -228,6 +228,9 @@ pub struct VolumeStats {
     pub samples: u32,
     /// Samples with non-zero opacity, blended.
     pub composited: u32,
+    /// Samples in bricks the transfer function makes transparent, skipped
+    /// without a fetch ([`Volume::with_bricks`]); part of `samples`.
+    pub skipped: u32,
 }
 
 impl core::ops::AddAssign for VolumeStats {
@@ -235,6 +238,7 @@ impl core::ops::AddAssign for VolumeStats {
         self.slices += o.slices;
         self.samples += o.samples;
         self.composited += o.composited;
+        self.skipped += o.skipped;
     }
 }
 
@@ -332,9 +336,21 @@ impl Compositor for NormalBlending {
         let i = (lights.diffuse(n) as i64 + ((lights.ambient as i64 * a) >> 15)).max(0);
         // Colour = I_f C_f / α_f: C_f (Q8.8) I (Q1.14) 2^15 / a, to 16
         // fraction bits: C I 2^9 / a, by one reciprocal.
-        let r = ((1i64 << 40) + a / 2) / a;
+        let r = reciprocal40(a as u32) as i64;
         cell.c.map(|c| (((c as i64 * i) >> 8) * r) >> 23)
     }
+}
+
+/// `floor((2^40 + a / 2) / a)` for `0 < a <= 2^15`, phase II's reciprocal
+/// of a pixel's opacity, by two 32-bit divisions (16-bit digits of long
+/// division: `2^24 / a`, then the remainder with the low digit `a / 2`)
+/// instead of a 64-bit one (a library call on every chip here).
+#[inline(always)]
+fn reciprocal40(a: u32) -> u64 {
+    debug_assert!(a > 0 && a <= 1 << 15);
+    let hi = (1 << 24) / a;
+    let lo = ((((1 << 24) - hi * a) << 16) | (a / 2)) / a;
+    (hi as u64) << 16 | lo as u64
 }
 
 /// Per-slice shading, the seed's baseline (Meissner et al.): every sample
@@ -426,7 +442,35 @@ impl<const N: usize, K: Cell> VolumePlane<N, K> {
             return stats;
         }
         cells[..n].fill(K::EMPTY);
+        // Chosen once: a volume without bricks runs a loop without the
+        // test.
+        if view.volume.brick_shift().is_some() {
+            Self::slices::<TN, C, M, S, true>(&mut cells[..n], area, tile, view, comp, &mut stats);
+        } else {
+            Self::slices::<TN, C, M, S, false>(&mut cells[..n], area, tile, view, comp, &mut stats);
+        }
+        stats
+    }
+
+    /// Phase I over the slices into `cells` (the tile's area), testing
+    /// each sample's brick when `BRICKS`.
+    fn slices<
+        const TN: usize,
+        C: TileConfig,
+        M: Compositor<Cell = K>,
+        const S: usize,
+        const BRICKS: bool,
+    >(
+        cells: &mut [K],
+        area: Rect,
+        tile: &Tile<TN, C>,
+        view: &VolumeView<'_, S>,
+        comp: &M,
+        stats: &mut VolumeStats,
+    ) {
         let (vol, tf) = (&view.volume, view.transfer);
+        // Counted in locals (registers), added once.
+        let (mut samples, mut skipped, mut composited) = (0, 0, 0);
         for s in view.slices.iter() {
             let Some(r) = s.bounds.intersect(&area) else {
                 continue;
@@ -439,13 +483,21 @@ impl<const N: usize, K: Cell> VolumePlane<N, K> {
                 for px in x0..x1 {
                     let idx = (row + px) as usize;
                     if z < tile.depth.read(idx) {
-                        stats.samples += 1;
-                        let (d, c, f) = vol.sample(t);
-                        let a = tf.weight(d) as i32;
-                        if a != 0 {
-                            stats.composited += 1;
-                            let nrm = vol.normal_at(&c, f);
-                            comp.blend(&mut cells[idx], nrm, a, tf.color(d));
+                        samples += 1;
+                        let empty = BRICKS
+                            && vol
+                                .brick_range(t)
+                                .is_some_and(|(lo, hi)| tf.transparent(lo, hi));
+                        if empty {
+                            skipped += 1;
+                        } else {
+                            let (d, probe) = vol.sample(t);
+                            let a = tf.weight(d) as i32;
+                            if a != 0 {
+                                composited += 1;
+                                let nrm = vol.normal_at(&probe);
+                                comp.blend(&mut cells[idx], nrm, a, tf.color(d));
+                            }
                         }
                     }
                     for (t, d) in t.iter_mut().zip(s.tx) {
@@ -454,7 +506,9 @@ impl<const N: usize, K: Cell> VolumePlane<N, K> {
                 }
             }
         }
-        stats
+        stats.samples += samples;
+        stats.skipped += skipped;
+        stats.composited += composited;
     }
 
     /// Shades the plane into `tile` (stage 5): every pixel with opacity
@@ -490,6 +544,132 @@ impl<const N: usize, K: Cell> VolumePlane<N, K> {
                     (1 << 15) - a,
                 );
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::geometry::{Angle, Mat4};
+    use crate::prelude::*;
+    use std::vec;
+
+    /// Skipping bricks the transfer function makes transparent changes no
+    /// cell: the same plane with and without bricks, for every brick side,
+    /// on the sphere and on noise (whose ranges are wide), from several
+    /// angles; and it skips something where there is empty space.
+    #[test]
+    fn brick_skipping_changes_nothing() {
+        const SIDE: u16 = 20;
+        let n = SIDE as usize;
+        let mut sphere_d = vec![0u8; n * n * n];
+        sphere(SIDE, &mut sphere_d).unwrap();
+        let mut next = crate::numeric::xorshift(7);
+        // Noise in blobs: mostly clear, some dense clusters.
+        let noise: std::vec::Vec<u8> = (0..n * n * n)
+            .map(|i| {
+                let r = next() as u8;
+                if (i / 97) % 5 == 0 {
+                    r
+                } else {
+                    r / 3
+                }
+            })
+            .collect();
+        let tf = Transfer::from_points(&[
+            TfPoint::new(90, 0, Rgb::new(255, 120, 60)),
+            TfPoint::new(170, 60, Rgb::new(250, 230, 120)),
+            TfPoint::new(230, 200, Rgb::new(255, 255, 255)),
+        ])
+        .unwrap();
+        let view = Mat4::look_at([0.0f32, 0.0, 2.0], [0.0; 3], [0.0, 1.0, 0.0]).unwrap();
+        let proj = Mat4::perspective(Angle::degrees(40), 1.0, 0.5, 4.0).unwrap();
+        let screen = Rect::new(0, 0, 32, 32);
+        type T = Tile<{ groups(32, 32) }, Planes<Rgb565Format, Depth16>>;
+        type P = VolumePlane<{ groups(32, 32) }, NormalCell>;
+        let mut tile = T::new();
+        tile.begin(screen, &Clear::default()).unwrap();
+        let mut skipped = 0;
+        for density in [&sphere_d, &noise] {
+            let plain = Volume::new(density, [SIDE; 3]).unwrap();
+            for deg in [0, 33, 90, 161, 270] {
+                let model = Mat4::<f32>::rotation_y(Angle::degrees(deg))
+                    .mul(&Mat4::rotation_x(Angle::degrees(deg / 3)));
+                let cells = |vol: Volume<'_>| {
+                    let scene: VolumeView<'_, 24> =
+                        VolumeView::new(vol, &tf, &model, &view, &proj, screen, 24).unwrap();
+                    let mut plane = P::new();
+                    let stats = plane.composite(&tile, &scene, &NormalBlending);
+                    (plane.cells, stats)
+                };
+                let (want, base) = cells(plain);
+                assert!(base.composited > 0 && base.skipped == 0);
+                for shift in BRICK_SHIFTS {
+                    let mut bricks = vec![0u8; brick_bytes([SIDE; 3], shift)];
+                    plain.compute_bricks(shift, &mut bricks).unwrap();
+                    let vol = plain.with_bricks(&bricks, shift).unwrap();
+                    let (got, stats) = cells(vol);
+                    assert!(got == want, "shift {shift}, {deg} degrees");
+                    assert_eq!(stats.samples, base.samples);
+                    assert_eq!(stats.composited, base.composited);
+                    skipped += stats.skipped;
+                }
+            }
+        }
+        assert!(skipped > 1000, "{skipped}");
+    }
+
+    /// Each brick's range is exactly its voxels' (one past its upper
+    /// faces, cut to the volume), against a direct scan; bad shifts and
+    /// lengths are refused.
+    #[test]
+    fn brick_ranges_are_their_voxels() {
+        let dims = [7u16, 5, 9];
+        let mut next = crate::numeric::xorshift(3);
+        let d: std::vec::Vec<u8> = (0..7 * 5 * 9).map(|_| next() as u8).collect();
+        let vol = Volume::new(&d, dims).unwrap();
+        for shift in BRICK_SHIFTS {
+            let mut b = vec![0u8; brick_bytes(dims, shift)];
+            vol.compute_bricks(shift, &mut b).unwrap();
+            let mut i = 0;
+            let side = 1usize << shift;
+            for bz in 0..9usize.div_ceil(side) {
+                for by in 0..5usize.div_ceil(side) {
+                    for bx in 0..7usize.div_ceil(side) {
+                        let (mut lo, mut hi) = (255u8, 0u8);
+                        for z in bz * side..=((bz + 1) * side).min(8) {
+                            for y in by * side..=((by + 1) * side).min(4) {
+                                for x in bx * side..=((bx + 1) * side).min(6) {
+                                    lo = lo.min(vol.density(x, y, z));
+                                    hi = hi.max(vol.density(x, y, z));
+                                }
+                            }
+                        }
+                        assert_eq!(
+                            (b[i], b[i + 1]),
+                            (lo, hi),
+                            "shift {shift} brick {bx},{by},{bz}"
+                        );
+                        i += 2;
+                    }
+                }
+            }
+            assert!(vol.with_bricks(&b[1..], shift).is_err());
+        }
+        assert!(vol.compute_bricks(0, &mut [0; 4096]).is_err());
+        assert!(vol.compute_bricks(6, &mut [0; 4096]).is_err());
+        assert!(vol.compute_bricks(2, &mut [0; 8]).is_err());
+    }
+
+    /// Phase II's two 32-bit divisions equal the 64-bit one for every
+    /// opacity.
+    #[test]
+    fn reciprocal40_is_the_64_bit_quotient() {
+        for a in 1..=1u32 << 15 {
+            let want = ((1u64 << 40) + a as u64 / 2) / a as u64;
+            assert_eq!(reciprocal40(a), want, "{a}");
         }
     }
 }

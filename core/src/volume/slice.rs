@@ -55,14 +55,20 @@ impl Slice {
                 if b < 0 || b > top {
                     return (0, 0, [0; 3]);
                 }
-            } else if tx > 0 {
-                // b + tx k >= 0  <=>  k >= ceil(-b / tx); <= top likewise.
-                x0 = x0.max(ax + div_ceil(-b, tx));
-                x1 = x1.min(ax + div_floor(top - b, tx) + 1);
-            } else {
-                x0 = x0.max(ax + div_ceil(top - b, tx));
-                x1 = x1.min(ax + div_floor(-b, tx) + 1);
+                continue;
             }
+            // With d = |tx|: 0 <= b + tx k <= top holds from
+            // k = -floor(b / d) (tx > 0) or -floor((top - b) / d) (tx < 0)
+            // up to floor((top - b) / d), respectively floor(b / d).
+            let d = tx.abs();
+            let (under, over) = (div_floor(b, d), div_floor(top - b, d));
+            let (from, to) = if tx > 0 {
+                (-under, over)
+            } else {
+                (-over, under)
+            };
+            x0 = x0.max(ax + from);
+            x1 = x1.min(ax + to + 1);
         }
         if x0 >= x1 {
             return (0, 0, [0; 3]);
@@ -73,19 +79,17 @@ impl Slice {
     }
 }
 
+/// `floor(n / d)` for `d > 0`: by a 32-bit division when both fit `i32`
+/// (every row of a volume up to 2^15 voxels a side seen at a sane scale:
+/// one instruction on a chip with a divider, where the `i64` one is a
+/// library call of about a hundred), else in `i64`.
 #[inline]
 fn div_floor(n: i64, d: i64) -> i64 {
-    let q = n / d;
-    if (n % d != 0) && ((n < 0) != (d < 0)) {
-        q - 1
-    } else {
-        q
+    debug_assert!(d > 0);
+    match (i32::try_from(n), i32::try_from(d)) {
+        (Ok(n), Ok(d)) => crate::numeric::div_floor_i32(n, d) as i64,
+        _ => n.div_euclid(d),
     }
-}
-
-#[inline]
-fn div_ceil(n: i64, d: i64) -> i64 {
-    -div_floor(-n, d)
 }
 
 /// A 3x3 matrix inverse by the adjugate; `None` when singular or not

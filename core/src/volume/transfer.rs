@@ -45,6 +45,9 @@ pub struct Transfer {
     /// `round(alpha * 2^15 / 255)`: the compositing weight, Q1.15.
     weight: [u16; 256],
     color: [Rgb; 256],
+    /// How many densities from each one on have zero weight (at most 255):
+    /// [`Transfer::transparent`]'s range test.
+    clear: [u8; 256],
 }
 
 impl Transfer {
@@ -60,6 +63,7 @@ impl Transfer {
             alpha: [0; 256],
             weight: [0; 256],
             color: [Rgb::new(0, 0, 0); 256],
+            clear: [0; 256],
         };
         for d in 0..256usize {
             let next = points.iter().position(|p| p.density as usize >= d);
@@ -85,7 +89,31 @@ impl Transfer {
             );
             t.weight[d] = ((t.alpha[d] as u32 * (1 << 16) + 255) / 510) as u16;
         }
+        let mut run = 0u32;
+        for d in (0..256).rev() {
+            run = if t.weight[d] == 0 { run + 1 } else { 0 };
+            t.clear[d] = run.min(255) as u8;
+        }
         Ok(t)
+    }
+
+    /// Whether every density in `lo..=hi` has zero opacity weight: a
+    /// brick of that range holds no visible sample.
+    ///
+    /// ```
+    /// use tilerast::prelude::Rgb;
+    /// use tilerast::volume::{TfPoint, Transfer};
+    /// let tf = Transfer::from_points(&[
+    ///     TfPoint::new(100, 0, Rgb::new(255, 255, 255)),
+    ///     TfPoint::new(200, 255, Rgb::new(255, 255, 255)),
+    /// ])?;
+    /// assert!(tf.transparent(0, 100));
+    /// assert!(!tf.transparent(90, 110));
+    /// # Ok::<(), tilerast::Error>(())
+    /// ```
+    #[inline(always)]
+    pub fn transparent(&self, lo: u8, hi: u8) -> bool {
+        hi.wrapping_sub(lo) < self.clear[lo as usize]
     }
 
     /// The opacity of density `d`.

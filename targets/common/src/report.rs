@@ -169,19 +169,22 @@ pub fn report_phases<K: SceneKind, const N: usize, const BC: usize, const BT: us
 }
 
 /// Prints `volume MODE prepare P setup S phase1 A phase2 B samples N
-/// composited C crc X` for normal blending and per-slice shading
-/// ([`crate::volumes`]; 128 KB of volume on the stack).
+/// composited C skipped K crc X` for each of [`crate::volumes::MODES`]
+/// ([`crate::volumes`]; 129 KB of volume on the stack).
 #[inline(never)]
 pub fn report_volume(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt::Result {
-    let mut density = [0u8; crate::volumes::VOXELS];
-    let mut normals = [0u8; 3 * crate::volumes::VOXELS];
-    match crate::volumes::run(&mut density, &mut normals, clock) {
+    use crate::volumes::{BRICK_BYTES, MODES, VOXELS};
+    let mut density = [0u8; VOXELS];
+    let mut normals = [0u8; 3 * VOXELS];
+    let mut bricks = [0u8; BRICK_BYTES];
+    match crate::volumes::run(&mut density, &mut normals, &mut bricks, clock) {
         Ok(runs) => {
-            for (mode, r) in ["normal_blending", "per_slice"].iter().zip(runs) {
+            for (mode, r) in MODES.iter().zip(runs) {
+                let s = r.stats;
                 writeln!(
                     out,
-                    "volume {mode} prepare {} setup {} phase1 {} phase2 {} samples {} composited {} crc 0x{:08x}",
-                    r.prepare, r.setup, r.phase1, r.phase2, r.stats.samples, r.stats.composited, r.crc
+                    "volume {mode} prepare {} setup {} phase1 {} phase2 {} samples {} composited {} skipped {} crc 0x{:08x}",
+                    r.prepare, r.setup, r.phase1, r.phase2, s.samples, s.composited, s.skipped, r.crc
                 )?;
             }
             Ok(())

@@ -1,15 +1,18 @@
 //! The volume workload (seed 002): the seed's "small sphere", 32^3, made
 //! and its normals quantised on the device, sliced into 32 view-aligned
 //! slices and drawn by normal blending into a 64 x 64 RGB565 frame in
-//! 32 x 32 tiles, then by per-slice shading (the baseline) — each phase
-//! timed, the frames hashed so the host can check every bit.
+//! 32 x 32 tiles, then by per-slice shading (the baseline), then by normal
+//! blending again skipping the bricks the transfer function makes
+//! transparent (4-cell bricks, 1 KB of ranges made on the device; the
+//! same frame) — each phase timed, the frames hashed so the host can
+//! check every bit.
 
 use crate::Clock;
 use tilerast::geometry::{Angle, Mat4};
 use tilerast::prelude::*;
 use tilerast::volume::{
-    sphere, Compositor, NormalBlending, PerSliceShading, TfPoint, Transfer, Volume, VolumeLights,
-    VolumePlane, VolumeStats, VolumeView,
+    brick_bytes, sphere, Compositor, NormalBlending, PerSliceShading, TfPoint, Transfer, Volume,
+    VolumeLights, VolumePlane, VolumeStats, VolumeView,
 };
 
 /// Volume side, voxels.
@@ -20,6 +23,13 @@ pub const VOXELS: usize = (VOL_SIDE as usize).pow(3);
 pub const VOL_SCREEN: u16 = 64;
 /// Slices.
 pub const VOL_SLICES: u16 = 32;
+/// Brick side of the empty-space skipping run, as a shift: 4 cells.
+pub const BRICK_SHIFT: u32 = 2;
+/// Bytes of brick ranges.
+pub const BRICK_BYTES: usize = brick_bytes([VOL_SIDE; 3], BRICK_SHIFT);
+/// The runs [`run`] returns, in order: normal blending, per-slice shading,
+/// normal blending skipping transparent bricks.
+pub const MODES: [&str; 3] = ["normal_blending", "per_slice", "normal_bricks"];
 /// Tile side.
 const TILE: u16 = 32;
 /// Tile capacity, groups of 8 pixels.
@@ -32,7 +42,8 @@ pub type VolumeConfig = St7789Config;
 /// What one volume frame cost and drew.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct VolumeRun {
-    /// Ticks: making the sphere and quantising its normals (once).
+    /// Ticks: making the sphere and quantising its normals (once; and
+    /// its brick ranges, for the run that skips).
     pub prepare: u32,
     /// Ticks: slicing (once a frame).
     pub setup: u32,
@@ -55,17 +66,20 @@ pub fn transfer() -> Result<Transfer, Error> {
     ])
 }
 
-/// Renders the workload twice — normal blending, then per-slice shading
-/// — into `density` and `normals` (the volume's RAM: 32 KB and 96 KB).
+/// Renders the workload three times ([`MODES`]) into `density`, `normals`
+/// and `bricks` (the volume's RAM: 32 KB, 96 KB and 1 KB).
 pub fn run(
     density: &mut [u8; VOXELS],
     normals: &mut [u8; 3 * VOXELS],
+    bricks: &mut [u8; BRICK_BYTES],
     clock: &mut impl Clock,
-) -> Result<[VolumeRun; 2], Error> {
+) -> Result<[VolumeRun; 3], Error> {
     clock.lap();
     sphere(VOL_SIDE, density)?;
     Volume::new(density, [VOL_SIDE; 3])?.compute_normals(normals)?;
     let prepare = clock.lap();
+    Volume::new(density, [VOL_SIDE; 3])?.compute_bricks(BRICK_SHIFT, bricks)?;
+    let prepare_bricks = prepare + clock.lap();
     let vol = Volume::new(density, [VOL_SIDE; 3])?.with_normals(normals)?;
     let tf = transfer()?;
     let model =
@@ -78,20 +92,28 @@ pub fn run(
     let scene: VolumeView<'_, { VOL_SLICES as usize }> =
         VolumeView::new(vol, &tf, &model, &view, &proj, screen, VOL_SLICES)?;
     let setup = clock.lap();
+    let skipping: VolumeView<'_, { VOL_SLICES as usize }> = VolumeView::new(
+        vol.with_bricks(bricks, BRICK_SHIFT)?,
+        &tf,
+        &model,
+        &view,
+        &proj,
+        screen,
+        VOL_SLICES,
+    )?;
     let mut tile: Tile<G, VolumeConfig> = Tile::new();
     let normal = frame(&mut tile, &scene, &NormalBlending, &lights, clock)?;
     let per_slice = frame(&mut tile, &scene, &PerSliceShading(&lights), &lights, clock)?;
+    let bricked = frame(&mut tile, &skipping, &NormalBlending, &lights, clock)?;
+    let with = |r: VolumeRun, prepare| VolumeRun {
+        prepare,
+        setup,
+        ..r
+    };
     Ok([
-        VolumeRun {
-            prepare,
-            setup,
-            ..normal
-        },
-        VolumeRun {
-            prepare,
-            setup,
-            ..per_slice
-        },
+        with(normal, prepare),
+        with(per_slice, prepare),
+        with(bricked, prepare_bricks),
     ])
 }
 
