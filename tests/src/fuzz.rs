@@ -475,7 +475,7 @@ fn volume_frames<S: tilerast::geometry::Real>(density: &[u8], dims: [u16; 3], p:
         .mul(&Mat4::rotation_y(deg(p[5])))
         .mul(&Mat4::rotation_x(deg(p[6])));
     let eye = q(2 + p[7] as i32); // 1/8 .. 16 units: inside the box too
-    let Ok(view) = Mat4::look_at([q(0), q(0), eye], [q(0); 3], [q(0), q(16), q(0)]) else {
+    let Ok(view_m) = Mat4::look_at([q(0), q(0), eye], [q(0); 3], [q(0), q(16), q(0)]) else {
         return false;
     };
     let Ok(proj) = Mat4::perspective(
@@ -498,7 +498,7 @@ fn volume_frames<S: tilerast::geometry::Real>(density: &[u8], dims: [u16; 3], p:
         return false;
     };
     let screen = Rect::new(0, 0, 24, 24);
-    let view = match VolumeView::<'_, 40>::new(vol, &tf, &model, &view, &proj, screen, slices) {
+    let view = match VolumeView::<'_, 40>::new(vol, &tf, &model, &view_m, &proj, screen, slices) {
         Ok(v) => v,
         Err(Error::Degenerate) => return false,
         Err(e) => panic!("slicing failed with {e:?}"),
@@ -538,6 +538,24 @@ fn volume_frames<S: tilerast::geometry::Real>(density: &[u8], dims: [u16; 3], p:
     let (a, blended) = draw(&view, &NormalBlending, &lights, true);
     let (b, _) = draw(&view, &NormalBlending, &lights, false);
     assert_eq!(a, b, "tiles changed the volume");
+    // Empty-space skipping, bricks of a side the input picks: the same
+    // image.
+    let shift = 1 + (p[2] >> 4) as u32 % 5;
+    let mut bricks = vec![0u8; brick_bytes(dims, shift)];
+    vol.compute_bricks(shift, &mut bricks)
+        .expect("room for the bricks");
+    let skipping = VolumeView::<'_, 40>::new(
+        vol.with_bricks(&bricks, shift).expect("the bricks' length"),
+        &tf,
+        &model,
+        &view_m,
+        &proj,
+        screen,
+        slices,
+    )
+    .expect("the same slicing");
+    let (s, _) = draw(&skipping, &NormalBlending, &lights, true);
+    assert_eq!(a, s, "skipping empty bricks changed the volume");
     let (ps, _) = draw(&view, &PerSliceShading(&lights), &lights, true);
     let l64 = l.map(|v| v.to_fixed(16).unwrap_or(0) as f64 / 65536.0);
     let bound =
