@@ -42,6 +42,42 @@ pub fn err<E: std::fmt::Display>(e: E) -> String {
     e.to_string()
 }
 
+/// One labelled series: a 2-pixel line through `pts` with a dot at each.
+pub fn line_with_dots<'a, CT>(
+    c: &mut ChartContext<'a, BitMapBackend<'a>, CT>,
+    pts: Vec<(f64, f64)>,
+    label: impl Into<String>,
+    color: RGBColor,
+) -> Result<(), String>
+where
+    CT: plotters::coord::CoordTranslate<From = (f64, f64)>,
+{
+    c.draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
+        .map_err(err)?
+        .label(label)
+        .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], color.stroke_width(2)));
+    c.draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
+        .map_err(err)?;
+    Ok(())
+}
+
+/// The series' legend in a framed box at `pos`.
+pub fn legend<'a, CT>(
+    c: &mut ChartContext<'a, BitMapBackend<'a>, CT>,
+    pos: SeriesLabelPosition,
+) -> Result<(), String>
+where
+    CT: plotters::coord::CoordTranslate<From = (f64, f64)>,
+{
+    c.configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font((SANS, 13))
+        .position(pos)
+        .draw()
+        .map_err(err)
+}
+
 /// Equal-sized pictures in a grid, one row of `pics` a row.
 pub fn grid(pics: &[&[Image]]) -> Image {
     let (w, h) = (pics[0][0].width, pics[0][0].height);

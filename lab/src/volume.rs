@@ -20,7 +20,7 @@
 //! slice blended). With colours from the table, the same comparison
 //! measures the approximation normal blending makes.
 
-use crate::chart::{err, grid, plot, SANS};
+use crate::chart::{err, grid, legend, line_with_dots, plot, SANS};
 use plotters::prelude::*;
 use std::path::Path;
 use tilerast::prelude::*;
@@ -380,23 +380,9 @@ pub fn brick_chart(rows: &[BrickRow]) -> Result<Image, String> {
                 .filter(|r| r.name == name)
                 .map(|r| (x(r.bytes), r.phase1_ms))
                 .collect();
-            c.draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
-                .map_err(err)?
-                .label(name)
-                .legend(move |(x, y)| {
-                    PathElement::new([(x, y), (x + 16, y)], color.stroke_width(2))
-                });
-            c.draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
-                .map_err(err)?;
+            line_with_dots(&mut c, pts, name, color)?;
         }
-        c.configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .label_font((SANS, 13))
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()
-            .map_err(err)?;
-        Ok(())
+        legend(&mut c, SeriesLabelPosition::UpperRight)
     })
 }
 
@@ -463,23 +449,9 @@ pub fn chart(rows: &[Row]) -> Result<Image, String> {
                 .enumerate()
                 .map(|(i, r)| (i as f64, f(r).max(bottom)))
                 .collect();
-            c.draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
-                .map_err(err)?
-                .label(label)
-                .legend(move |(x, y)| {
-                    PathElement::new([(x, y), (x + 16, y)], color.stroke_width(2))
-                });
-            c.draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
-                .map_err(err)?;
+            line_with_dots(&mut c, pts, label, color)?;
         }
-        c.configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .label_font((SANS, 13))
-            .position(SeriesLabelPosition::UpperLeft)
-            .draw()
-            .map_err(err)?;
-        Ok(())
+        legend(&mut c, SeriesLabelPosition::UpperLeft)
     })
 }
 
