@@ -858,9 +858,12 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
             mesh.normal(idx[2])?,
         ];
         // Normals 90° or more apart along an edge are a crease, not a
-        // smooth surface: no midpoint normal to speak of.
+        // smooth surface: no midpoint normal to speak of. (In `i64`: three
+        // products of Q15 components reach 3 x 2^30, past `i32` for the
+        // unnormalised normals a file may hold — found by the `mesh` fuzz
+        // target.)
         for (a, b) in [(0, 1), (1, 2), (2, 0)] {
-            let dot: i32 = (0..3).map(|c| n[a][c] as i32 * n[b][c] as i32).sum();
+            let dot: i64 = (0..3).map(|c| n[a][c] as i64 * n[b][c] as i64).sum();
             if dot <= 0 {
                 return None;
             }
