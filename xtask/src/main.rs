@@ -764,6 +764,7 @@ fn fuzz(args: &[String]) -> Result<(), String> {
         let log = format!("target/fuzz-logs/{t}.log");
         let file = std::fs::File::create(&log).map_err(|e| format!("{log}: {e}"))?;
         eprintln!("xtask: fuzzing `{t}` for {seconds} s (libFuzzer's log: {log})");
+        let started = std::time::Instant::now();
         let status = Command::new("cargo")
             .current_dir("fuzz")
             .env("RUSTC_BOOTSTRAP", "1")
@@ -773,7 +774,9 @@ fn fuzz(args: &[String]) -> Result<(), String> {
             .status()
             .map_err(|e| format!("cannot run cargo fuzz: {e}"))?;
         let text = std::fs::read_to_string(&log).unwrap_or_default();
-        let mut row = FuzzRow::from_log(t, seconds, &text);
+        // The seconds it ran: a finding stops it early.
+        let ran = started.elapsed().as_secs().min(seconds);
+        let mut row = FuzzRow::from_log(t, ran, &text);
         if !status.success() {
             row.findings = text
                 .lines()
