@@ -196,6 +196,14 @@ mod planes {
         /// Sets pixel `i` to the integer depth `z` (clears, Z fills, resolved
         /// coverage).
         fn put(&mut self, i: usize, z: u16);
+        /// Sets every pixel of `r` to `z` (the tile's clear): a slice fill
+        /// where the plane is stored.
+        #[inline(always)]
+        fn put_range(&mut self, r: core::ops::Range<usize>, z: u16) {
+            for i in r {
+                self.put(i, z);
+            }
+        }
         /// Reads pixel `i`'s integer depth, rounded down (65535 when there is
         /// no plane).
         fn read(&self, i: usize) -> u16;
@@ -298,6 +306,10 @@ mod planes {
         #[inline(always)]
         fn put(&mut self, i: usize, z: u16) {
             self.0 .0.as_flattened_mut()[i] = T::from_u32((z as u32) << FRAC);
+        }
+        #[inline(always)]
+        fn put_range(&mut self, r: core::ops::Range<usize>, z: u16) {
+            ColorPlane::fill(&mut self.0, r, (z as u32) << FRAC);
         }
         #[inline(always)]
         fn read(&self, i: usize) -> u16 {
@@ -448,6 +460,12 @@ mod planes {
         fn put(&mut self, i: usize, z: u16) {
             if !self.off {
                 DepthPlane::put(&mut self.plane, i, z);
+            }
+        }
+        #[inline(always)]
+        fn put_range(&mut self, r: core::ops::Range<usize>, z: u16) {
+            if !self.off {
+                DepthPlane::put_range(&mut self.plane, r, z);
             }
         }
         #[inline(always)]

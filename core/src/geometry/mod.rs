@@ -388,8 +388,8 @@ impl<S: Real> View<S> {
         // fraction bits (the factor is exact in both back ends, and
         // z * 65535 itself would not fit `Fx`).
         let z = (p[2] * iw).max(S::ZERO).min(S::ONE) * S::from_q(65535, 16);
-        let z = z.to_fixed(16)?.clamp(0, 65535) as u16;
-        Some((x.to_fixed(4)?, y.to_fixed(4)?, z))
+        let z = z.round_small(16)?.clamp(0, 65535) as u16;
+        Some((x.round_small(4)?, y.round_small(4)?, z))
     }
 }
 
@@ -560,13 +560,17 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
             return Ok(stats);
         }
 
-        // 2. Transform and project every vertex into the cache.
+        // 2. Transform and project every vertex into the cache. When no
+        // position can overflow (the rows' absolute sums are small, checked
+        // once), the per-vertex finiteness test is skipped.
+        let mvp = q15_matrix(&mvp);
+        let bounded = bounded(&mvp);
         let first = self.used;
         let vp = self.viewport;
         let cache = &mut self.cache[first..first + nv];
         for (i, slot) in cache.iter_mut().enumerate() {
             let p = clip_position(mesh, &mvp, i as u16);
-            if !p.iter().all(|v| v.is_finite()) {
+            if !bounded && !p.iter().all(|v| v.is_finite()) {
                 return Err(DrawError::NotFinite { vertex: i as u16 });
             }
             let mut code = clip::outcode(&p, vp.guard);
@@ -898,11 +902,57 @@ fn group_of(mesh: &Mesh<'_>, t: u16) -> u16 {
         .unwrap_or(0)
 }
 
-/// The clip-space position of vertex `i`.
+/// The clip-space position of vertex `i` through `m`, the draw's matrix
+/// as [`q15_matrix`] prepares it.
 #[inline]
-fn clip_position<S: Real>(mesh: &Mesh<'_>, mvp: &Mat4<S>, i: u16) -> [S; 4] {
+fn clip_position<S: Real>(mesh: &Mesh<'_>, m: &Mat4<S>, i: u16) -> [S; 4] {
     let q = mesh.position(i);
-    mvp.transform(q.map(|c| S::from_q(c as i64, 15)))
+    m.transform(q.map(|c| q15(c as i32)))
+}
+
+/// A Q15 position component as [`clip_position`] feeds it to the matrix:
+/// the integer itself when the back end folds the scale into the matrix
+/// ([`Real::FOLD_Q15`]), else the fraction.
+#[inline(always)]
+fn q15<S: Real>(c: i32) -> S {
+    if S::FOLD_Q15 {
+        S::from_i32(c)
+    } else {
+        S::from_q(c as i64, 15)
+    }
+}
+
+/// `mvp` with the `2^-15` of Q15 positions folded into its first three
+/// columns when the back end does so ([`Real::FOLD_Q15`]: exact, a power
+/// of two), so [`clip_position`] gives the same numbers as scaling each
+/// position.
+fn q15_matrix<S: Real>(mvp: &Mat4<S>) -> Mat4<S> {
+    let mut m = *mvp;
+    if S::FOLD_Q15 {
+        let s = S::from_q(1, 15);
+        for row in &mut m.m {
+            for v in &mut row[..3] {
+                *v = *v * s;
+            }
+        }
+    }
+    m
+}
+
+/// Whether no vertex of a mesh can reach a non-finite clip position
+/// through `m` ([`q15_matrix`]'s form): each row's sum of absolute values
+/// over the largest position (`|q| <= 1`, or `2^15` folded) stays below
+/// 2^14, so no product or partial sum can overflow or saturate (either
+/// back end: they only grow toward that sum, rounding aside, far below
+/// the limit).
+fn bounded<S: Real>(m: &Mat4<S>) -> bool {
+    let q = q15::<S>(1 << 15).max(q15::<S>(-(1 << 15)));
+    let abs = |v: S| v.max(-v);
+    let lim = S::from_i32(1 << 14);
+    m.m.iter().all(|r| {
+        let sum = (abs(r[0]) + abs(r[1]) + abs(r[2])) * q + abs(r[3]);
+        sum.is_finite() && sum < lim
+    })
 }
 
 /// Twice the signed screen area (y down), sub-pixels squared.

@@ -75,6 +75,32 @@ pub trait Real:
     /// `round(self * 2^frac)` (halves rounded up), `None` when not finite or
     /// beyond `i32`.
     fn to_fixed(self, frac: u32) -> Option<i32>;
+    /// `self * 2^frac` rounded to an integer when it lies below 2^22 in
+    /// magnitude (a projected vertex: sub-pixels inside the guard band, a
+    /// 16-bit depth), else `None`: `f32` rounds halves to even with one
+    /// addition (exact there: adding `1.5 · 2^23` puts the sum where the
+    /// spacing of `f32` values is 1, and its exponent says whether it
+    /// did), a third of [`Self::to_fixed`]'s instructions on the
+    /// Cortex-M4F; `Fx` is [`Self::to_fixed`].
+    ///
+    /// ```
+    /// use tilerast::geometry::{Fx, Real};
+    /// assert_eq!(2.3f32.round_small(4), Some(37)); // 36.8
+    /// assert_eq!((-2.3f32).round_small(4), Some(-37));
+    /// assert_eq!(2.5f32.round_small(0), Some(2)); // a half, to even
+    /// assert_eq!(1e7f32.round_small(0), None);
+    /// assert_eq!(f32::NAN.round_small(0), None);
+    /// assert_eq!(Fx::from_q(23, 1).round_small(0), Some(12)); // 11.5, half up
+    /// ```
+    fn round_small(self, frac: u32) -> Option<i32> {
+        self.to_fixed(frac)
+    }
+    /// Whether a mesh's positions enter [`Mat4::transform`](super::Mat4)
+    /// as integers, the `2^-15` of their Q15 scale folded into the matrix
+    /// ([`super::Scene::draw`]): for `f32`, whose scaling by a power of two
+    /// is exact, it saves three multiplications a vertex; `Fx` would lose
+    /// the matrix's low bits, so it keeps the scale per position.
+    const FOLD_Q15: bool = false;
     /// The larger of two values.
     fn max(self, o: Self) -> Self {
         if o > self {
@@ -125,6 +151,14 @@ impl Real for f32 {
     }
     fn is_finite(self) -> bool {
         self.is_finite()
+    }
+    const FOLD_Q15: bool = true;
+    #[inline]
+    fn round_small(self, frac: u32) -> Option<i32> {
+        const MAGIC: f32 = 12_582_912.0; // 1.5 · 2^23
+        let t = (self * (1u64 << frac) as f32 + MAGIC).to_bits();
+        // In [2^23, 2^24): exponent 127 + 23, sign clear.
+        (t >> 23 == 150).then(|| (t as i32).wrapping_sub(MAGIC.to_bits() as i32))
     }
     fn to_fixed(self, frac: u32) -> Option<i32> {
         let t = self * (1u64 << frac) as f32 + 0.5;
