@@ -322,8 +322,9 @@ pub(crate) fn pixel_bounds(v: &[Vertex; 3]) -> Option<Rect> {
 /// A vertex as the fused mesh path reads it, in place ([`crate::tile`]'s
 /// plane-contract path; the geometry stage's vertex cache is made of
 /// them): sub-pixel position (1/16 px, within the validated domain),
-/// 16-bit depth (smaller is nearer), 8-bit RGB, and a byte the producer
-/// keeps its own flags in (the raster ignores it). 16 bytes.
+/// 16-bit depth (smaller is nearer), 8-bit RGB, and a byte and 16 bits
+/// the producer keeps its own flags in (the raster ignores them: the
+/// geometry stage's outcodes, and its front-triangle bits). 16 bytes.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub(crate) struct MeshVertex {
     pub x: i32,
@@ -331,6 +332,7 @@ pub(crate) struct MeshVertex {
     pub z: u16,
     pub rgb: [u8; 3],
     pub code: u8,
+    pub spare: u16,
 }
 
 impl MeshVertex {
@@ -342,6 +344,7 @@ impl MeshVertex {
             y: v.y.to_bits(),
             z: v.z,
             rgb: [v.color.r, v.color.g, v.color.b],
+            spare: 0,
             code: 0,
         }
     }

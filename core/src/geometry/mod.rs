@@ -339,6 +339,7 @@ impl VertexSlot {
             z: 0,
             rgb: [0; 3],
             code: 0,
+            spare: 0,
         },
     };
     fn vertex(&self) -> Vertex {
@@ -413,6 +414,12 @@ struct Draw<'m, S> {
     opts: DrawOptions,
     /// The lights in model space, kept for fast Phong's midpoints.
     lights: heapless::Vec<ModelLight<S>, MAX_LIGHTS>,
+    /// Whether the spare bits of the draw's cache slots list its drawn
+    /// triangles (bit `t % 16` of slot `t / 16`): every triangle is then
+    /// inside the guard band or wholly outside, and binning visits the
+    /// front ones without reading or culling the others (the M4 teapot:
+    /// half its triangles are back faces).
+    front_bits: bool,
 }
 
 /// A frame's 3D scene: camera, viewport, lights, up to `D` draws of
@@ -587,30 +594,41 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
         }
         stats.vertices = nv as u32;
 
-        // 3. Cull and mark the vertices visible triangles use.
+        // 3. Cull and mark the vertices visible triangles use; note the
+        // front triangles in the cache's spare bits (16 a slot) when they
+        // fit, so binning walks only them ([`Draw::front_bits`]).
         let front_sign = front_sign(opts);
-        for t in 0..mesh.triangles() {
-            let idx = mesh.triangle(t);
-            let v = idx.map(|i| &cache[i as usize]);
-            let (or, and) = (
-                v[0].v.code | v[1].v.code | v[2].v.code,
-                v[0].v.code & v[1].v.code & v[2].v.code,
-            );
-            if and & ALL != 0 {
-                stats.outside += 1;
-                continue;
-            }
-            if or & ALL == 0 {
-                if !faces(area(&v), opts.cull, front_sign) {
-                    stats.culled += 1;
+        let bits = mesh.triangles() as usize <= 16 * nv;
+        let nt = mesh.triangles();
+        for w in 0..nt.div_ceil(16) {
+            let mut word = 0u16;
+            for t in w * 16..(w * 16 + 16).min(nt) {
+                let idx = mesh.triangle(t);
+                let v = idx.map(|i| &cache[i as usize]);
+                let (or, and) = (
+                    v[0].v.code | v[1].v.code | v[2].v.code,
+                    v[0].v.code & v[1].v.code & v[2].v.code,
+                );
+                if and & ALL != 0 {
+                    stats.outside += 1;
                     continue;
                 }
-                stats.front += 1;
-            } else {
-                stats.clipped += 1;
+                if or & ALL == 0 {
+                    if !faces(area(&v), opts.cull, front_sign) {
+                        stats.culled += 1;
+                        continue;
+                    }
+                    stats.front += 1;
+                    word |= 1 << (t % 16);
+                } else {
+                    stats.clipped += 1;
+                }
+                for i in idx {
+                    cache[i as usize].v.code |= USED;
+                }
             }
-            for i in idx {
-                cache[i as usize].v.code |= USED;
+            if bits {
+                cache[w as usize].v.spare = word;
             }
         }
 
@@ -654,6 +672,7 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
             tri_base,
             opts: *opts,
             lights,
+            front_bits: bits && stats.clipped == 0,
         });
         self.stats.add(&stats);
         Ok(stats)
@@ -818,6 +837,7 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
                     z,
                     rgb,
                     code: 0,
+                    spare: 0,
                 },
             })
         };
@@ -1148,6 +1168,20 @@ impl<S: Real, const D: usize> CommandSource for Scene<'_, S, D> {
                 Cull::Front => (front < 0, front > 0),
             };
             let base = &self.cache[d.first as usize..];
+            if d.front_bits {
+                let words = (d.mesh.triangles() as usize).div_ceil(16);
+                for (w, slot) in base[..words].iter().enumerate() {
+                    let mut m = slot.v.spare;
+                    while m != 0 {
+                        let t = (w * 16) as u16 + m.trailing_zeros() as u16;
+                        m &= m - 1;
+                        let v = d.mesh.triangle(t).map(|i| &base[i as usize]);
+                        let b = SubBox::of_points(v.map(|s| (s.v.x, s.v.y)));
+                        f((d.tri_base + t as u32) << 3, b.pixels());
+                    }
+                }
+                continue;
+            }
             for t in 0..d.mesh.triangles() {
                 let v = d.mesh.triangle(t).map(|i| &base[i as usize]);
                 if v[0].v.code & v[1].v.code & v[2].v.code & ALL != 0 {

@@ -457,6 +457,7 @@ mod tests {
             z: (next() % 60000) as u16,
             rgb: [next() as u8, next() as u8, next() as u8],
             code: 0,
+            spare: 0,
         })
     }
 
@@ -477,6 +478,7 @@ mod tests {
             z: 0,
             rgb: [0; 3],
             code: 0,
+            spare: 0,
         });
         for v in &mut v {
             v.z = (next() % 60000) as u16;
