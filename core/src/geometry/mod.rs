@@ -576,7 +576,8 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
         let vp = self.viewport;
         let cache = &mut self.cache[first..first + nv];
         for (i, slot) in cache.iter_mut().enumerate() {
-            let p = clip_position(mesh, &mvp, i as u16);
+            let q = mesh.position(i as u16);
+            let p = mvp.m.map(|row| S::affine_q15(&row, q, bounded));
             if !bounded && !p.iter().all(|v| v.is_finite()) {
                 return Err(DrawError::NotFinite { vertex: i as u16 });
             }
@@ -927,7 +928,7 @@ fn group_of(mesh: &Mesh<'_>, t: u16) -> u16 {
 #[inline]
 fn clip_position<S: Real>(mesh: &Mesh<'_>, m: &Mat4<S>, i: u16) -> [S; 4] {
     let q = mesh.position(i);
-    m.transform(q.map(|c| q15(c as i32)))
+    m.m.map(|row| S::affine_q15(&row, q, false))
 }
 
 /// A Q15 position component as [`clip_position`] feeds it to the matrix:
