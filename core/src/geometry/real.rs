@@ -254,7 +254,7 @@ fn mul_q16(a: i32, b: i32) -> i32 {
     if ((ah + 128) as u32 | (bh + 128) as u32) < 256 {
         // Both below 128 in magnitude (the geometry stage's usual values):
         // every term and the sum within 2^31, no 64-bit arithmetic.
-        return (ah * bh << 16) + ah * bl + al * bh + lo as i32;
+        return ((ah * bh) << 16) + ah * bl + al * bh + lo as i32;
     }
     let hh = (ah * bh) as i64;
     let mid = (ah * bl) as i64 + (al * bh) as i64;
