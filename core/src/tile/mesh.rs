@@ -211,8 +211,13 @@ impl Recip {
     /// (two 32x32-bit products; `bits` is [`Self::bits`], passed so the
     /// common path's shifts are constants), and the anchor's value through
     /// them.
+    ///
+    /// With `NARROW` the caller knows both steps fit `i32` (a colour lane,
+    /// `|d| < 2^25`, on the common path, whose weights' steps are below
+    /// 2^31: each step below 2^27), and the anchor's products are 32x32-bit
+    /// ones — the same numbers.
     #[inline(always)]
-    fn plane(&self, bits: u32, a0: i32, d1: i32, d2: i32) -> Plane {
+    fn plane<const NARROW: bool>(&self, bits: u32, a0: i32, d1: i32, d2: i32) -> Plane {
         let g = |w: (i32, i32)| {
             (d1 as i64 * w.0 as i64 + d2 as i64 * w.1 as i64 + (1 << (bits - 1))) >> bits
         };
@@ -221,11 +226,17 @@ impl Recip {
         // small triangles: `crate::setup`): wrapping 64-bit products of the
         // whole steps, whose shifted low 32 bits are exact modulo 2^32 (a
         // sliver's step may not fit `i32`; the values inside it do).
-        let off = gx
-            .wrapping_mul(self.o.0 as i64)
-            .wrapping_add(gy.wrapping_mul(self.o.1 as i64))
-            .wrapping_add(1 << (SUBPIXEL_BITS - 1))
-            >> SUBPIXEL_BITS;
+        let round = 1 << (SUBPIXEL_BITS - 1);
+        let off = if NARROW {
+            debug_assert!(gx as i32 as i64 == gx && gy as i32 as i64 == gy);
+            let (gx, gy) = (gx as i32 as i64, gy as i32 as i64);
+            (gx * self.o.0 as i64 + gy * self.o.1 as i64 + round) >> SUBPIXEL_BITS
+        } else {
+            gx.wrapping_mul(self.o.0 as i64)
+                .wrapping_add(gy.wrapping_mul(self.o.1 as i64))
+                .wrapping_add(round)
+                >> SUBPIXEL_BITS
+        };
         Plane {
             c: a0.wrapping_add(off as i32),
             gx: gx as i32,
@@ -279,10 +290,15 @@ impl<const N: usize, C: TileConfig> Tile<N, C> {
             .take(<C::Format as PixelFormat>::Lanes::LEN)
         {
             let c0 = l0.lane(i);
-            *p = rc.plane(bits, c0, l1.lane(i) - c0, l2.lane(i) - c0);
+            let (d1, d2) = (l1.lane(i) - c0, l2.lane(i) - c0);
+            *p = if bits == W_BITS {
+                rc.plane::<true>(bits, c0, d1, d2)
+            } else {
+                rc.plane::<false>(bits, c0, d1, d2)
+            };
         }
         let zl = |k: usize| (v[k].z as i32) << Z_FRAC;
-        let zp = rc.plane(bits, zl(0), zl(1) - zl(0), zl(2) - zl(0));
+        let zp = rc.plane::<false>(bits, zl(0), zl(1) - zl(0), zl(2) - zl(0));
         (cp, zp)
     }
 
