@@ -269,6 +269,95 @@ pub fn scaled(mut s: Scene, k: u16) -> Result<Scene, Box<dyn std::error::Error>>
 /// Screen scales of [`report`]'s size series.
 pub const SCALES: [u16; 4] = [1, 2, 4, 8];
 
+/// The rotating teapot as the Cortex-M4 firmware draws it
+/// (`tilerast_fw::spin`: the f32 vertex stage, the plane contract,
+/// RGB565 + Z16 in 64x32 tiles), timed on the host over its frames, and
+/// the f64 reference drawing the same triangles (the stage's output).
+pub struct SpinTimes {
+    /// Frames timed (one turn).
+    pub frames: u32,
+    /// Triangles drawn, a frame on average.
+    pub triangles: f64,
+    /// The core: vertex stage, binning and raster, ms a frame.
+    pub core_ms: f64,
+    /// The core's vertex stage alone, ms a frame.
+    pub vertex_ms: f64,
+    /// The f64 reference on the stage's triangles, ms a frame.
+    pub reference_ms: f64,
+}
+
+/// Times [`SpinTimes`]: each frame `runs` times, medians summed.
+pub fn spin(model: &std::path::Path, runs: usize) -> Result<SpinTimes, Box<dyn std::error::Error>> {
+    use tilerast::geometry::{Mesh, VertexSlot};
+    use tilerast_fw::spin;
+    let bytes = tilerast_sim::mesh::export_mesh(model, &tilerast_sim::Limits::default())?;
+    let mesh = Mesh::parse(&bytes)?;
+    let mut slots = vec![VertexSlot::EMPTY; mesh.vertices() as usize];
+    let mut tile = Box::new(Tile::<{ groups(64, 32) }, spin::SpinConfig>::new());
+    let mut bins = Box::new(Bins::<4096, 32>::new());
+    let cfg = tilerast_sim::Config {
+        width: spin::SIDE,
+        height: spin::SIDE,
+        format: tilerast_sim::FormatKind::Rgb565,
+        tile: (64, 32),
+        dither: 0,
+        depth: true,
+        wid: false,
+        clear: Clear {
+            color: spin::BACKGROUND,
+            ..Clear::default()
+        },
+        aa: tilerast_sim::AaKind::None,
+        cull: tilerast::command::Cull::None,
+    };
+    const FRAMES: u32 = 8;
+    let mut t = SpinTimes {
+        frames: FRAMES,
+        triangles: 0.0,
+        core_ms: 0.0,
+        vertex_ms: 0.0,
+        reference_ms: 0.0,
+    };
+    for k in 0..FRAMES {
+        let mut cmds = Vec::new();
+        let mut keep = |c: &Command| cmds.push(*c);
+        spin::frame_discard::<f32, { groups(64, 32) }, 4096, 32>(
+            &mesh,
+            &mut slots,
+            &mut tile,
+            &mut bins,
+            (64, 32),
+            (k, FRAMES),
+            Some(&mut keep),
+        )?;
+        t.triangles += cmds.len() as f64 / FRAMES as f64;
+        t.core_ms += 1e3
+            * median(runs, || {
+                spin::frame_discard::<f32, { groups(64, 32) }, 4096, 32>(
+                    &mesh,
+                    &mut slots,
+                    &mut tile,
+                    &mut bins,
+                    (64, 32),
+                    (k, FRAMES),
+                    None,
+                )
+                .unwrap();
+            });
+        t.vertex_ms += 1e3
+            * median(runs, || {
+                spin::vertex_only::<f32>(&mesh, &mut slots, (k, FRAMES)).unwrap();
+            });
+        t.reference_ms += 1e3
+            * median(runs, || {
+                std::hint::black_box(reference::render(&cfg, &cmds));
+            });
+    }
+    let n = FRAMES as f64;
+    (t.core_ms, t.vertex_ms, t.reference_ms) = (t.core_ms / n, t.vertex_ms / n, t.reference_ms / n);
+    Ok(t)
+}
+
 /// The report: Markdown tables of both measurements.
 pub fn report(
     scenes: &[std::path::PathBuf],
@@ -294,6 +383,26 @@ pub fn report(
             f.reference_ms / f.tiled_ms
         );
     }
+    let s = spin(std::path::Path::new("assets/models/teapot.obj"), runs)?;
+    md += &format!(
+        "\n## The rotating teapot, as the firmware draws it\n\n\
+         `tilerast_fw::spin` on the host: the f32 vertex stage (transform, cull, light), binning \
+         and the plane contract's mesh path, RGB565 + Z16 in 64x32 tiles, each tile discarded, \
+         over {} frames of a turn; the f64 reference draws the triangles the stage emits. \
+         Milliseconds a frame.\n\n\
+         | triangles drawn | core, whole frame | of which the vertex stage | the rest: binning \
+         and raster | f64 reference, raster only | reference / core, whole frame | reference / \
+         core, raster |\n| ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n\
+         | {:.0} | {:.3} | {:.3} | {:.3} | {:.3} | {:.1}x | {:.1}x |\n",
+        s.frames,
+        s.triangles,
+        s.core_ms,
+        s.vertex_ms,
+        s.core_ms - s.vertex_ms,
+        s.reference_ms,
+        s.reference_ms / s.core_ms,
+        s.reference_ms / (s.core_ms - s.vertex_ms)
+    );
     if let Some(first) = scenes.first() {
         md += &format!(
             "\n## Triangle size: the first scene at 1x to {}x\n\n\

@@ -94,6 +94,47 @@ where
     Ok(out)
 }
 
+/// Frame `k` of `frames` as [`frame_into`] renders it, each finished tile
+/// discarded: the pipeline alone, vertex stage included (the host times
+/// the firmware's frame with it: `tilerast-lab frames`). `each`, when
+/// given, receives every command the frame draws (the f64 reference draws
+/// the same triangles).
+pub fn frame_discard<S: Real, const N: usize, const BC: usize, const BT: usize>(
+    mesh: &Mesh<'_>,
+    slots: &mut [VertexSlot],
+    tile_buf: &mut Tile<N, SpinConfig>,
+    bins: &mut Bins<BC, BT>,
+    tile: (u16, u16),
+    (k, frames): (u32, u32),
+    each: Option<&mut dyn FnMut(&Command)>,
+) -> Result<FrameStats, Error> {
+    let mut scene = stage::<S>(slots)?;
+    scene.draw(mesh, &rotation(k, frames), &DrawOptions::default())?;
+    if let Some(f) = each {
+        scene.each(|c| f(c))?;
+    }
+    let mut frame = Frame::new(SIDE, SIDE, tile.0, tile.1)?;
+    frame.clear.color = BACKGROUND;
+    frame
+        .render_binned(tile_buf, bins, &scene, |_| Ok::<(), ()>(()))
+        .map_err(|e| match e {
+            FlushError::Raster(e) => e,
+            // The discarding target never fails.
+            _ => Error::BadSize,
+        })
+}
+
+/// The vertex stage alone for frame `k` of `frames`, nothing hashed or
+/// drawn (the host's timing of it).
+pub fn vertex_only<S: Real>(
+    mesh: &Mesh<'_>,
+    slots: &mut [VertexSlot],
+    (k, frames): (u32, u32),
+) -> Result<DrawStats, Error> {
+    let mut scene = stage::<S>(slots)?;
+    Ok(scene.draw(mesh, &rotation(k, frames), &DrawOptions::default())?)
+}
+
 /// The vertex stage alone for frame `k` of `frames`: what it did, its
 /// ticks, and an FNV-1a hash of every triangle it emits (positions, depths,
 /// colours) — the geometry stage's output, checked bit for bit against the
