@@ -1222,6 +1222,10 @@ impl<S: Real, const D: usize> CommandSource for Scene<'_, S, D> {
         // The current draw's triangle keys `[lo, hi)`, and whether they go
         // straight to the tile with one state.
         let (mut lo, mut hi, mut direct, mut state) = (u32::MAX, 0, false, State::default());
+        // The draw's cache slots and mesh, and whether its triangles share
+        // its state (untagged, or one group).
+        let (mut base, mut mesh, mut shared): (&[VertexSlot], Option<&Mesh<'_>>, bool) =
+            (&[], None, true);
         for key in keys {
             let tri = key >> 3;
             if !(lo..hi).contains(&tri) {
@@ -1238,25 +1242,27 @@ impl<S: Real, const D: usize> CommandSource for Scene<'_, S, D> {
                 (lo, hi) = (d.tri_base, d.tri_base + d.mesh.triangles() as u32);
                 direct = !(d.opts.shading != Shading::Gouraud && d.opts.lit);
                 state = d.opts.state;
+                base = &self.cache[d.first as usize..];
+                mesh = Some(&d.mesh);
+                shared = state.tag == 0 || d.mesh.groups() == 1;
                 if tri >= hi {
                     continue;
                 }
             }
-            let d = &self.draws[di];
             let t = (tri - lo) as u16;
-            if direct && key & 7 == 0 {
-                let base = &self.cache[d.first as usize..];
-                let v = d.mesh.triangle(t).map(|i| &base[i as usize].v);
+            if let (true, 0, Some(mesh)) = (direct, key & 7, mesh) {
+                let v = mesh.triangle(t).map(|i| &base[i as usize].v);
                 if (v[0].code | v[1].code | v[2].code) & ALL == 0 {
-                    if state.tag == 0 || d.mesh.groups() == 1 {
+                    if shared {
                         tile.draw_mesh_triangle(v, &state);
                     } else {
-                        tile.draw_mesh_triangle(v, &tagged(&d.mesh, &state, t));
+                        tile.draw_mesh_triangle(v, &tagged(mesh, &state, t));
                     }
                     n += 1;
                     continue;
                 }
             }
+            let d = &self.draws[di];
             self.emit(d, t, |p| p == key & 7, &mut |_, c| {
                 tile.draw_valid(c, &[]);
                 n += 1;
