@@ -152,7 +152,11 @@ impl Recip {
                 bits: W_BITS,
                 o,
             };
-            return rc.conditioned(extent).then_some(rc);
+            // Each step is below 2^31 (`|k| < 2 area2`, `r <= 2^46 /
+            // area2`): 31 bits, so a box under 2^7 pixels is conditioned
+            // without looking (a mesh's triangles; the test costs ~20
+            // instructions a pair).
+            return (extent < 1 << (W_SPREAD_BITS - 31) || rc.conditioned(extent)).then_some(rc);
         }
         Self::sliver(area2, r, m, (a, s), o, extent)
     }
