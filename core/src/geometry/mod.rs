@@ -603,7 +603,9 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
         let nt = mesh.triangles();
         for w in 0..nt.div_ceil(16) {
             let mut word = 0u16;
-            for t in w * 16..(w * 16 + 16).min(nt) {
+            // (In u32: the last word of a 65,535-triangle mesh ends past
+            // u16.)
+            for t in (w as u32 * 16..(w as u32 * 16 + 16).min(nt as u32)).map(|t| t as u16) {
                 let idx = mesh.triangle(t);
                 let v = idx.map(|i| &cache[i as usize]);
                 let (or, and) = (
