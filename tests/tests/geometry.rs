@@ -22,17 +22,20 @@ fn render<S: Real>(scene: &Scene<'_, S>) -> Vec<u32> {
     let mut img = vec![0u32; W as usize * H as usize];
     let mut bins: Bins<4096, 16> = Bins::new();
     frame
-        .render_binned(&mut tile, &mut bins, scene, |t| {
-            let r = t.area();
-            for y in r.y..r.y + r.h as i32 {
-                for x in r.x..r.x + r.w as i32 {
-                    img[(y * W as i32 + x) as usize] = t.raw(x, y).unwrap();
-                }
-            }
-            Ok::<(), ()>(())
-        })
+        .render_binned(&mut tile, &mut bins, scene, |t| keep(&mut img, t))
         .unwrap();
     img
+}
+
+/// Copies a finished tile into the W x H image.
+fn keep(img: &mut [u32], t: &Tile<{ groups(16, 16) }, Cfg>) -> Result<(), ()> {
+    let r = t.area();
+    for y in r.y..r.y + r.h as i32 {
+        for x in r.x..r.x + r.w as i32 {
+            img[(y * W as i32 + x) as usize] = t.raw(x, y).unwrap();
+        }
+    }
+    Ok(())
 }
 
 fn cube_scene<'a, S: Real>(
@@ -419,15 +422,7 @@ fn render_unbinned<S: Real>(scene: &Scene<'_, S>) -> Vec<u32> {
     let mut tile: Tile<{ groups(16, 16) }, Cfg> = Tile::new();
     let mut img = vec![0u32; W as usize * H as usize];
     frame
-        .render_with(&mut tile, scene, |t| {
-            let r = t.area();
-            for y in r.y..r.y + r.h as i32 {
-                for x in r.x..r.x + r.w as i32 {
-                    img[(y * W as i32 + x) as usize] = t.raw(x, y).unwrap();
-                }
-            }
-            Ok::<(), ()>(())
-        })
+        .render_with(&mut tile, scene, |t| keep(&mut img, t))
         .unwrap();
     img
 }
