@@ -272,7 +272,9 @@ fn ticked(line: &str, per_tick: f64) -> Option<f64> {
         "scene" => Some((num("raster_ticks")? + num("flush_ticks")?) * per_tick),
         // A rotating-mesh frame: its vertex stage, then binning, drawing
         // and the CRC flush.
-        "spin" => Some((num("vertex_ticks")? + num("raster_ticks")?) * per_tick),
+        "spin" => {
+            Some((num("vertex_ticks")? + num("raster_ticks")? + num("flush_ticks")?) * per_tick)
+        }
         "bench" => Some(num("ticks")? * per_tick),
         _ => None,
     }

@@ -452,7 +452,7 @@ pub fn report_benches(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt
 
 /// Prints one line per frame of a rotating mesh drawn by the geometry stage
 /// in back end `S`: `spin NAME backend B frame K crc 0x... vertex_ticks V
-/// raster_ticks R vertices N lit L front F clipped C culled U replayed P`.
+/// raster_ticks R flush_ticks F vertices N lit L front F clipped C culled U replayed P`.
 #[inline(never)]
 #[allow(clippy::too_many_arguments)]
 pub fn report_spin<
@@ -477,10 +477,11 @@ pub fn report_spin<
             writeln!(
                 out,
                 "spin {name} backend {backend} frame {k} frames {frames} crc 0x{:08x} vertex_ticks {} raster_ticks {} \
-                 vertices {} lit {} front {} clipped {} culled {} replayed {}",
+                 flush_ticks {} vertices {} lit {} front {} clipped {} culled {} replayed {}",
                 f.crc,
                 f.vertex_ticks,
                 f.raster_ticks,
+                f.flush_ticks,
                 g.vertices,
                 g.lit,
                 g.front,

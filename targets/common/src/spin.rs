@@ -33,8 +33,12 @@ pub struct SpinFrame {
     pub crc: u32,
     /// Ticks of the vertex stage (transform, cull, light).
     pub vertex_ticks: u64,
-    /// Ticks of binning, rasterizing and the CRC "flush".
+    /// Ticks of binning and rasterizing.
     pub raster_ticks: u64,
+    /// Ticks of handing the finished tiles to the target (the CRC
+    /// "flush" on the boards), counted apart as the peers' figures have
+    /// none.
+    pub flush_ticks: u64,
     /// What the geometry stage did.
     pub geometry: DrawStats,
     /// What the frame pipeline did.
@@ -89,8 +93,15 @@ where
     out.vertex_ticks = clock.lap() as u64;
     let mut frame = Frame::new(SIDE, SIDE, tile.0, tile.1)?;
     frame.clear.color = BACKGROUND;
-    out.frame = frame.render_binned(tile_buf, bins, &scene, |t| t.flush(target))?;
-    out.raster_ticks = clock.lap() as u64;
+    let (mut raster, mut flush) = (0, 0);
+    out.frame = frame.render_binned(tile_buf, bins, &scene, |t| {
+        raster += clock.lap() as u64;
+        let r = t.flush(target);
+        flush += clock.lap() as u64;
+        r
+    })?;
+    out.raster_ticks = raster + clock.lap() as u64;
+    out.flush_ticks = flush;
     Ok(out)
 }
 
