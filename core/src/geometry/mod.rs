@@ -933,18 +933,6 @@ fn clip_position<S: Real>(mesh: &Mesh<'_>, m: &Mat4<S>, i: u16) -> [S; 4] {
     m.m.map(|row| S::affine_q15(&row, q, false))
 }
 
-/// A Q15 position component as [`clip_position`] feeds it to the matrix:
-/// the integer itself when the back end folds the scale into the matrix
-/// ([`Real::FOLD_Q15`]), else the fraction.
-#[inline(always)]
-fn q15<S: Real>(c: i32) -> S {
-    if S::FOLD_Q15 {
-        S::from_i32(c)
-    } else {
-        S::from_q(c as i64, 15)
-    }
-}
-
 /// `mvp` with the `2^-15` of Q15 positions folded into its first three
 /// columns when the back end does so ([`Real::FOLD_Q15`]: exact, a power
 /// of two), so [`clip_position`] gives the same numbers as scaling each
@@ -969,7 +957,7 @@ fn q15_matrix<S: Real>(mvp: &Mat4<S>) -> Mat4<S> {
 /// back end: they only grow toward that sum, rounding aside, far below
 /// the limit).
 fn bounded<S: Real>(m: &Mat4<S>) -> bool {
-    let q = q15::<S>(1 << 15).max(q15::<S>(-(1 << 15)));
+    let q = S::from_q15(i16::MAX).max(-S::from_q15(i16::MIN));
     let abs = |v: S| v.max(-v);
     let lim = S::from_i32(1 << 14);
     m.m.iter().all(|r| {

@@ -106,14 +106,25 @@ pub trait Real:
     #[inline]
     fn affine_q15(row: &[Self; 4], q: [i16; 3], bounded: bool) -> Self {
         let _ = bounded;
-        let c = |v: i16| {
-            if Self::FOLD_Q15 {
-                Self::from_i32(v as i32)
-            } else {
-                Self::from_q(v as i64, 15)
-            }
-        };
+        let c = Self::from_q15;
         row[0] * c(q[0]) + row[1] * c(q[1]) + row[2] * c(q[2]) + row[3]
+    }
+    /// A Q15 position component as [`Self::affine_q15`] feeds it to a
+    /// matrix row: the integer itself when the back end folds the scale
+    /// into the matrix ([`Self::FOLD_Q15`]), else the fraction `v / 2^15`.
+    ///
+    /// ```
+    /// use tilerast::geometry::{Fx, Real};
+    /// assert_eq!(f32::from_q15(-3), -3.0);
+    /// assert_eq!(Fx::from_q15(1 << 14), Fx::HALF);
+    /// ```
+    #[inline(always)]
+    fn from_q15(v: i16) -> Self {
+        if Self::FOLD_Q15 {
+            Self::from_i32(v as i32)
+        } else {
+            Self::from_q(v as i64, 15)
+        }
     }
     /// Whether a mesh's positions enter [`Mat4::transform`](super::Mat4)
     /// as integers, the `2^-15` of their Q15 scale folded into the matrix
@@ -348,10 +359,8 @@ impl Real for Fx {
     #[inline]
     fn affine_q15(row: &[Self; 4], q: [i16; 3], bounded: bool) -> Self {
         if !bounded {
-            return row[0] * Fx::from_q(q[0] as i64, 15)
-                + row[1] * Fx::from_q(q[1] as i64, 15)
-                + row[2] * Fx::from_q(q[2] as i64, 15)
-                + row[3];
+            let c = Fx::from_q15;
+            return row[0] * c(q[0]) + row[1] * c(q[1]) + row[2] * c(q[2]) + row[3];
         }
         // `fixed`'s product of `m` and the position `2 q` (its bits) is
         // `floor(m q / 2^15)`; with `m = mh 2^16 + ml`, that is
