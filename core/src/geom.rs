@@ -348,6 +348,17 @@ impl MeshVertex {
             code: 0,
         }
     }
+
+    /// The command vertex it stands for.
+    #[inline(always)]
+    pub(crate) fn vertex(&self) -> Vertex {
+        Vertex::new(
+            crate::numeric::Coord::from_bits(self.x),
+            crate::numeric::Coord::from_bits(self.y),
+            self.z,
+            crate::format::Rgb::new(self.rgb[0], self.rgb[1], self.rgb[2]),
+        )
+    }
 }
 
 /// A triangle's box in sub-pixels, inclusive: made once per triangle and

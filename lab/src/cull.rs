@@ -105,7 +105,7 @@ fn room_camera(k: u32, frames: u32) -> tilerast_sim::Result<Camera> {
     ))
 }
 
-type Cfg = St7789Config;
+type Cfg = tilerast_fw::city::CityConfig;
 
 /// Walks `c` for `frames` frames; returns the row and every frame's pixels
 /// (packed) when `keep`.

@@ -207,6 +207,58 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    /// A summary started at the cleared depth ([`HiZ::reset_to`]) and kept
+    /// as bounds after depth-tested drawing ([`HiZ::touch_near`]: the
+    /// nearest vertex depth less the walk's margin of 2) counts what brute
+    /// force counts, for random Gouraud triangles and probes.
+    #[test]
+    fn hiz_near_bounds_count_equals_brute_force(
+        tris in prop::collection::vec(
+            prop::array::uniform3((-80i32..720, -80i32..560, 0u16..1200)), 0..10),
+        probes in prop::collection::vec((-5i32..45, -5i32..35, 1u32..50, 1u32..40, 0u16..1300), 1..8),
+        clear in 900u16..=u16::MAX,
+    ) {
+        type T = Tile<150, Planes<Rgb565Format, Depth16>>;
+        let mut tile = T::new();
+        let area = Rect::new(3, 5, 40, 30);
+        let c = Clear { depth: clear, ..Clear::default() };
+        tile.begin(area, &c).unwrap();
+        let mut h3: HiZ<30, 3> = HiZ::new();
+        let mut h2: HiZ<100, 2> = HiZ::new();
+        h3.reset_to(area, clear);
+        h2.reset_to(area, clear);
+        for t in &tris {
+            let v = t.map(|(x, y, z)| Vertex::new(Coord::from_bits(x), Coord::from_bits(y), z, Rgb::new(9, 9, 9)));
+            let cmd = Command::Triangle { v, state: State::default() };
+            if tile.draw(&cmd).is_err() {
+                continue;
+            }
+            let Some(b) = cmd.bounds() else { continue };
+            let near = v[0].z.min(v[1].z).min(v[2].z).saturating_sub(2);
+            h3.touch_near(&b, near);
+            h2.touch_near(&b, near);
+            for &(px, py, pw, ph, pz) in &probes {
+                let p = Rect::new(px, py, pw, ph);
+                let mut brute = 0;
+                for yy in p.y..p.y + p.h as i32 {
+                    for xx in p.x..p.x + p.w as i32 {
+                        if let Some(d) = tile.depth(xx, yy) {
+                            brute += (pz < d) as u32;
+                        }
+                    }
+                }
+                let mut cost = TestCost::default();
+                prop_assert_eq!(h3.count(&tile, p, pz, true, u32::MAX, &mut cost), brute);
+                prop_assert_eq!(h2.count(&tile, p, pz, true, u32::MAX, &mut cost), brute);
+                prop_assert_eq!(h3.count(&tile, p, pz, true, 1, &mut cost).min(1), brute.min(1));
+            }
+        }
+    }
+}
+
 /// A camera inside a building's box or looking from behind the near plane:
 /// the box covers the viewport at depth 0 (always visible), never a wrong
 /// rectangle.

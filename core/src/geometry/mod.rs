@@ -87,7 +87,7 @@ use crate::error::Error;
 use crate::format::Rgb;
 use crate::frame::CommandSource;
 use crate::geom::{MeshVertex, Rect, SubBox};
-use crate::numeric::{Coord, COORD_LIMIT};
+use crate::numeric::COORD_LIMIT;
 use crate::tile::Tile;
 use clip::{ClipVertex, ALL};
 
@@ -157,6 +157,73 @@ impl<S: Real> Lighting<S> {
 }
 
 pub use crate::command::Cull;
+
+/// An opaque Gouraud mesh triangle straight from a [`Scene`]'s vertex
+/// cache: three compact vertices and the state to draw them with. The tile
+/// draws it as the [`Command::Triangle`] of the same vertices, without the
+/// command being built ([`Primitive::Mesh`]).
+#[derive(Debug, Clone, Copy)]
+pub struct MeshTriangle<'c> {
+    pub(crate) v: [&'c MeshVertex; 3],
+    pub(crate) state: State,
+}
+
+impl MeshTriangle<'_> {
+    /// The [`Command::Triangle`] it draws as.
+    ///
+    /// ```
+    /// use tilerast::geometry::*;
+    /// use tilerast::prelude::*;
+    /// let mut bytes = [0u8; CUBE_BYTES];
+    /// let cube = Mesh::cube(&mut bytes)?;
+    /// let mut slots = [VertexSlot::EMPTY; 24];
+    /// let mut scene: Scene<'_, f32, 1> = Scene::new(&mut slots);
+    /// scene.set_camera(Mat4::look_at([2.0, 1.5, 3.0], [0.0; 3], [0.0, 1.0, 0.0])?,
+    ///                  Mat4::perspective(Angle::degrees(50), 1.0, 1.0, 20.0)?);
+    /// scene.set_viewport(Rect::new(0, 0, 32, 32))?;
+    /// scene.draw(&cube, &Mat4::scale([1.0; 3]), &DrawOptions::default())?;
+    /// let (mut prims, mut cmds) = (vec![], vec![]);
+    /// scene.each_primitive_of(0, |p| prims.push(match p {
+    ///     Primitive::Mesh(t) => t.command(),
+    ///     Primitive::Command(c) => *c,
+    /// }));
+    /// scene.each_of(0, |c| cmds.push(*c));
+    /// assert_eq!(prims, cmds);
+    /// # Ok::<(), tilerast::Error>(())
+    /// ```
+    pub fn command(&self) -> Command {
+        Command::Triangle {
+            v: self.v.map(|v| v.vertex()),
+            state: self.state,
+        }
+    }
+
+    /// Its pixel bounds: the command's [`Command::bounds`].
+    pub(crate) fn bounds(&self) -> Option<Rect> {
+        SubBox::of_points(self.v.map(|v| (v.x, v.y))).pixels()
+    }
+
+    /// Its nearest vertex depth.
+    pub(crate) fn nearest(&self) -> u16 {
+        self.v[0].z.min(self.v[1].z).min(self.v[2].z)
+    }
+
+    /// Draws it into `tile` ([`Tile::draw`] of [`Self::command`]).
+    #[inline(always)]
+    pub(crate) fn draw<const N: usize, C: TileConfig>(&self, tile: &mut Tile<N, C>) {
+        tile.draw_mesh_triangle(self.v, &self.state);
+    }
+}
+
+/// One primitive of a draw ([`Scene::each_primitive_of`]): a command, or a
+/// mesh triangle that goes to the tile without one.
+#[derive(Debug, Clone, Copy)]
+pub enum Primitive<'c> {
+    /// A command (clipped pieces, Phong, per-triangle flat shading).
+    Command(&'c Command),
+    /// An unclipped opaque Gouraud triangle from the vertex cache.
+    Mesh(MeshTriangle<'c>),
+}
 
 /// How a draw's lit triangles are shaded between their vertices.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -343,13 +410,7 @@ impl VertexSlot {
         },
     };
     fn vertex(&self) -> Vertex {
-        let v = &self.v;
-        Vertex::new(
-            Coord::from_bits(v.x),
-            Coord::from_bits(v.y),
-            v.z,
-            Rgb::new(v.rgb[0], v.rgb[1], v.rgb[2]),
-        )
+        self.v.vertex()
     }
 }
 
@@ -699,6 +760,48 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
         }
     }
 
+    /// Calls `f` with every primitive of draw `draw`: what
+    /// [`each_of`](Self::each_of) gives, with each unclipped Gouraud
+    /// triangle as a [`Primitive::Mesh`] read in place from the vertex
+    /// cache instead of a command (the culling walk's fused path:
+    /// [`crate::occlusion`]).
+    pub fn each_primitive_of(&self, draw: usize, mut f: impl FnMut(Primitive<'_>)) {
+        let Some(d) = self.draws.get(draw) else {
+            return;
+        };
+        // As `draw_keys`: a draw's Gouraud triangles go straight to the tile.
+        let direct = !(d.opts.shading != Shading::Gouraud && d.opts.lit);
+        let base = &self.cache[d.first as usize..];
+        let shared = d.opts.state.tag == 0 || d.mesh.groups() == 1;
+        let sign = front_sign(&d.opts);
+        for t in 0..d.mesh.triangles() {
+            if direct {
+                let v = d.mesh.triangle(t).map(|i| &base[i as usize]);
+                let (or, and) = (
+                    v[0].v.code | v[1].v.code | v[2].v.code,
+                    v[0].v.code & v[1].v.code & v[2].v.code,
+                );
+                if (or | and) & ALL == 0 {
+                    if faces(area(&v), d.opts.cull, sign) {
+                        let state = if shared {
+                            d.opts.state
+                        } else {
+                            tagged(&d.mesh, &d.opts.state, t)
+                        };
+                        f(Primitive::Mesh(MeshTriangle {
+                            v: v.map(|s| &s.v),
+                            state,
+                        }));
+                    }
+                    continue;
+                }
+            }
+            self.emit(d, t, |_| true, &mut |_, c: &Command| {
+                f(Primitive::Command(c))
+            });
+        }
+    }
+
     /// The screen rectangle and nearest depth of the world-space box
     /// `lo..=hi` under this scene's camera and viewport, widened so that
     /// every fragment of geometry inside the box lies in the rectangle and
@@ -827,7 +930,8 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
             c: v[k].v.rgb.map(|c| S::from_i32(c as i32)),
         });
         let poly = clip::clip(tri, or, self.viewport.guard);
-        if poly.n < 3 {
+        let poly = poly.vertices();
+        if poly.len() < 3 {
             return;
         }
         let proj = |cv: &ClipVertex<S>| -> Option<VertexSlot> {
@@ -844,12 +948,12 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
                 },
             })
         };
-        let Some(a) = proj(&poly.v[0]) else { return };
-        for piece in 1..poly.n - 1 {
+        let Some(a) = proj(&poly[0]) else { return };
+        for piece in 1..poly.len() - 1 {
             if !want(piece as u32 - 1) {
                 continue;
             }
-            let (Some(b), Some(c)) = (proj(&poly.v[piece]), proj(&poly.v[piece + 1])) else {
+            let (Some(b), Some(c)) = (proj(&poly[piece]), proj(&poly[piece + 1])) else {
                 continue;
             };
             let tri = [&a, &b, &c];

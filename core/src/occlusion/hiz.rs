@@ -2,11 +2,18 @@
 //! occlusion unit reads): for each `2^SHIFT`-square block of the tile, the
 //! nearest and farthest stored depth.
 //!
-//! It is kept up to date **per command, not per fragment**: drawing a
-//! command marks the blocks of its bounding rectangle stale, and a test
-//! refreshes a stale block (one pass over its pixels) only when it needs
-//! it. The raster loops carry nothing for it, and a frame that does not
-//! cull has no summary at all.
+//! It is kept **per command, not per fragment**. A tile cleared to one
+//! depth starts exact ([`HiZ::reset_to`]). A depth-tested command no nearer
+//! than `z` lowers its blocks' nearest depth to `z` and leaves their
+//! farthest as it was ([`HiZ::touch_near`]): a passing fragment only brings
+//! a pixel nearer, so each block holds *bounds* on its depths, which decide
+//! as much as exact values do whenever `z` lies outside them. Anything else
+//! marks its blocks stale ([`HiZ::touch`]). A test reads a block only when
+//! the bounds straddle its depth (or the block is stale), and then
+//! refreshes it to exact values in the same pass. The raster loops carry
+//! nothing for it, and a frame that does not cull has no summary at all.
+//! (Bounds instead of stale marks after each command: the M4 city walk's
+//! depth reads 55,216 -> 50,694 over 8 frames.)
 
 use crate::config::TileConfig;
 use crate::fragment::DepthPlane;
@@ -53,7 +60,8 @@ pub struct TestCost {
 /// ```
 #[derive(Debug, Clone)]
 pub struct HiZ<const BLOCKS: usize, const SHIFT: u32 = 3> {
-    /// Per block: nearest, farthest; `min > max` marks a stale block.
+    /// Per block: bounds on the nearest and farthest depth (exact after a
+    /// refresh); `min > max` marks a stale block.
     min: [u16; BLOCKS],
     max: [u16; BLOCKS],
     area: Rect,
@@ -91,6 +99,31 @@ impl<const BLOCKS: usize, const SHIFT: u32> HiZ<BLOCKS, SHIFT> {
 
     /// Starts a tile: every block stale.
     pub fn reset(&mut self, area: Rect) {
+        self.start(area, 1, 0);
+    }
+
+    /// Starts a tile whose depth plane was cleared to `depth`: every block
+    /// exact, nothing to read until something is drawn.
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// use tilerast::occlusion::{HiZ, TestCost};
+    /// type T = Tile<{ groups(16, 16) }, Planes<Rgb565Format, Depth16>>;
+    /// let mut tile = T::new();
+    /// tile.begin(Rect::new(0, 0, 16, 16), &Clear::default())?;
+    /// let mut hiz: HiZ<4, 3> = HiZ::new();
+    /// hiz.reset_to(tile.area(), u16::MAX);
+    /// let mut cost = TestCost::default();
+    /// assert_eq!(hiz.count(&tile, Rect::new(0, 0, 16, 16), 7, true, u32::MAX, &mut cost), 256);
+    /// assert_eq!(cost.reads, 0); // decided from the summary alone
+    /// # Ok::<(), Error>(())
+    /// ```
+    pub fn reset_to(&mut self, area: Rect, depth: u16) {
+        self.start(area, depth, depth);
+    }
+
+    /// Starts a tile with every block's bounds `lo..=hi`.
+    fn start(&mut self, area: Rect, lo: u16, hi: u16) {
         let side = 1u32 << SHIFT;
         let (cols, rows) = (area.w.div_ceil(side), area.h.div_ceil(side));
         self.area = area;
@@ -98,8 +131,61 @@ impl<const BLOCKS: usize, const SHIFT: u32> HiZ<BLOCKS, SHIFT> {
         self.active = (cols * rows) as usize <= BLOCKS;
         if self.active {
             let n = (cols * rows) as usize;
-            self.min[..n].fill(1);
-            self.max[..n].fill(0);
+            self.min[..n].fill(lo);
+            self.max[..n].fill(hi);
+        }
+    }
+
+    /// Notes depth-tested drawing inside `r` (screen pixels) whose
+    /// fragments are no nearer than `z`: each up-to-date block's nearest
+    /// depth becomes at most `z`, its farthest stays (a passing fragment
+    /// only brings a pixel nearer), so the block keeps bounds and needs no
+    /// refresh until a test's depth falls between them. For drawing that is
+    /// not depth-tested, or whose depth is unknown, call [`HiZ::touch`].
+    ///
+    /// ```
+    /// use tilerast::prelude::*;
+    /// use tilerast::occlusion::{HiZ, TestCost};
+    /// type T = Tile<{ groups(16, 16) }, Planes<Rgb565Format, Depth16>>;
+    /// let mut tile = T::new();
+    /// tile.begin(Rect::new(0, 0, 16, 16), &Clear::default())?;
+    /// let mut hiz: HiZ<4, 3> = HiZ::new();
+    /// hiz.reset_to(tile.area(), u16::MAX);
+    /// // A depth-tested wall at depth 100 over the left half.
+    /// let v = |x: i32, y: i32| Vertex::new(Coord::from_num(x), Coord::from_num(y), 100, Rgb::default());
+    /// for t in [[v(0, 0), v(8, 0), v(8, 16)], [v(0, 0), v(8, 16), v(0, 16)]] {
+    ///     tile.draw(&Command::Triangle { v: t, state: State::default() })?;
+    /// }
+    /// hiz.touch_near(&Rect::new(0, 0, 8, 16), 100);
+    /// let mut cost = TestCost::default();
+    /// // Nearer than anything there: decided without a read.
+    /// assert_eq!(hiz.count(&tile, Rect::new(0, 0, 8, 8), 50, true, u32::MAX, &mut cost), 64);
+    /// assert_eq!(cost.reads, 0);
+    /// // Behind the wall: the block is read once and becomes exact...
+    /// assert_eq!(hiz.count(&tile, Rect::new(0, 0, 8, 8), 200, true, u32::MAX, &mut cost), 0);
+    /// let reads = cost.reads;
+    /// // ...so the next test behind it reads nothing.
+    /// assert_eq!(hiz.count(&tile, Rect::new(0, 0, 8, 8), 300, true, u32::MAX, &mut cost), 0);
+    /// assert_eq!(cost.reads, reads);
+    /// # Ok::<(), Error>(())
+    /// ```
+    pub fn touch_near(&mut self, r: &Rect, z: u16) {
+        if !self.active {
+            return;
+        }
+        let Some(r) = r.intersect(&self.area) else {
+            return;
+        };
+        let (bx0, by0, bx1, by1) = self.blocks(&r);
+        for by in by0..=by1 {
+            let row = (by * self.cols) as usize;
+            let run = row + bx0 as usize..=row + bx1 as usize;
+            for (lo, &hi) in self.min[run.clone()].iter_mut().zip(&self.max[run]) {
+                // (A stale block, `lo > hi`, stays stale.)
+                if *lo <= hi {
+                    *lo = (*lo).min(z);
+                }
+            }
         }
     }
 
@@ -135,10 +221,10 @@ impl<const BLOCKS: usize, const SHIFT: u32> HiZ<BLOCKS, SHIFT> {
     /// How many pixels of `r` hold a depth farther than `z`: the visible
     /// fragments of a box at depth `z` over `r`, nothing written — counted
     /// up to `limit` (the test stops there; `u32::MAX` for the exact
-    /// count). With `summary`, up-to-date blocks are decided from their
-    /// nearest and farthest depth and only blocks that straddle `z` are
-    /// read; a stale block is read row by row, and refreshed when the test
-    /// read all of it. Without, every pixel up to the limit is read (what
+    /// count). With `summary`, blocks whose bounds lie on one side of `z`
+    /// are decided from them and only blocks that straddle `z` (or are
+    /// stale) are read, row by row, and refreshed to exact bounds when the
+    /// test read all of it. Without, every pixel up to the limit is read (what
     /// an occlusion query's pass over the box costs). The count is the
     /// same either way. A summary last reset for another rectangle than
     /// `tile`'s is reset to the tile's first.
@@ -206,10 +292,10 @@ impl<const BLOCKS: usize, const SHIFT: u32> HiZ<BLOCKS, SHIFT> {
                     let at = y as usize * w + x0 as usize;
                     at..at + (x1 - x0) as usize
                 });
-                if !fresh && whole_y && x0 == bx << SHIFT && x1 == a.w.min((bx + 1) << SHIFT) {
-                    // Stale and wholly tested: count and refresh in one
-                    // pass, row by row, stopping at the limit (the block
-                    // then stays stale).
+                if whole_y && x0 == bx << SHIFT && x1 == a.w.min((bx + 1) << SHIFT) {
+                    // Stale or loose, and wholly tested: count and refresh
+                    // in one pass, row by row, stopping at the limit (the
+                    // block then keeps what it had).
                     let (mut l, mut h, mut whole) = (u16::MAX, 0, true);
                     for run in rows {
                         cost.reads += run.len() as u64;

@@ -5,7 +5,7 @@
 //!
 //! **The pieces.**
 //! - [`HiZ`]: a per-block depth summary of the tile (nearest and farthest
-//!   Z of each `2^SHIFT` block, 4 bytes a block), kept stale-or-exact per
+//!   Z of each `2^SHIFT` block, 4 bytes a block), kept as bounds per
 //!   command. A box test counts the fragments of a screen rectangle at one
 //!   depth that would pass the Z test, writing nothing; whole blocks are
 //!   decided from the summary, only straddling blocks are read.
@@ -22,7 +22,11 @@
 //! - [`Objects`]: where the walk gets a node's screen box and an object's
 //!   commands. [`MeshObjects`] serves meshes through the geometry stage's
 //!   [`Scene`], running an object's vertex stage the first time a tile
-//!   finds it visible, so an object hidden everywhere is never transformed.
+//!   finds it visible, so an object hidden everywhere is never transformed;
+//!   its unclipped Gouraud triangles reach the walk as
+//!   [`Primitive::Mesh`](crate::geometry::Primitive) and go from the vertex
+//!   cache to the tile without a command being built (the fused mesh path,
+//!   under the plane contract when the tile's configuration chooses it).
 //!
 //! **Tiles.** A tile holds part of the screen, so a node is tested in every
 //! tile its screen box touches, against that tile's depth. The results
@@ -95,7 +99,7 @@ use crate::command::Command;
 use crate::config::TileConfig;
 use crate::error::{Error, FlushError};
 use crate::frame::Frame;
-use crate::geometry::{DrawOptions, Mat4, Mesh, Real, Scene, ScreenBox, Vec3};
+use crate::geometry::{DrawOptions, Mat4, Mesh, Primitive, Real, Scene, ScreenBox, Vec3};
 use crate::raster::coverage::AaMode;
 use crate::tile::Tile;
 
@@ -189,6 +193,15 @@ pub trait Objects<S> {
     /// opaque, depth-tested). Called in every tile where the object is
     /// drawn: an implementation prepares an object once per frame.
     fn commands(&mut self, object: u16, draw: &mut dyn FnMut(&Command));
+
+    /// Calls `draw` with every primitive of object `object`: what the walk
+    /// calls. By default each of [`commands`](Self::commands); a
+    /// geometry-stage source ([`MeshObjects`]) hands its unclipped Gouraud
+    /// triangles over as [`Primitive::Mesh`], which go from the vertex
+    /// cache to the tile without a command.
+    fn primitives(&mut self, object: u16, draw: &mut dyn FnMut(Primitive<'_>)) {
+        self.commands(object, &mut |c| draw(Primitive::Command(c)));
+    }
 }
 
 /// [`Objects`] from meshes placed by model matrices, through a geometry
@@ -245,8 +258,24 @@ impl<S: Real, const D: usize> Objects<S> for MeshObjects<'_, '_, S, D> {
     }
 
     fn commands(&mut self, object: u16, draw: &mut dyn FnMut(&Command)) {
+        if let Some(d) = self.prepare(object) {
+            self.scene.each_of(d, |c| draw(c));
+        }
+    }
+
+    fn primitives(&mut self, object: u16, draw: &mut dyn FnMut(Primitive<'_>)) {
+        if let Some(d) = self.prepare(object) {
+            self.scene.each_primitive_of(d, draw);
+        }
+    }
+}
+
+impl<S: Real, const D: usize> MeshObjects<'_, '_, S, D> {
+    /// Object `object`'s draw index, its vertex stage run the first time
+    /// it is asked for; `None` when it draws nothing.
+    fn prepare(&mut self, object: u16) -> Option<usize> {
         let o = object as usize;
-        let Some(&d) = self.draw.get(o) else { return };
+        let &d = self.draw.get(o)?;
         let d = if d == UNSEEN {
             let (mesh, model) = &self.items[o];
             let before = self.scene.draw_count();
@@ -264,9 +293,7 @@ impl<S: Real, const D: usize> Objects<S> for MeshObjects<'_, '_, S, D> {
         } else {
             d
         };
-        if d != EMPTY {
-            self.scene.each_of(d as usize, |c| draw(c));
-        }
+        (d != EMPTY).then_some(d as usize)
     }
 }
 
@@ -424,7 +451,7 @@ impl<S: Real, const NODES: usize> Culler<S, NODES> {
         let mut st = CullStats::default();
         for area in frame.tiles() {
             tile.begin(area, &frame.clear)?;
-            hiz.reset(area);
+            hiz.reset_to(area, frame.clear.depth);
             self.walk(mode, tile, hiz, eye, objects, &mut st);
             // Coverage antialiasing: spans and lines over the resolved
             // pixels (the walk's tests stay conservative).
@@ -521,29 +548,53 @@ impl<S: Real, const NODES: usize> Culler<S, NODES> {
                     st.objects_drawn += 1;
                     let early = mode == CullMode::SinglePass;
                     let track = mode != CullMode::Off;
-                    objects.commands(o, &mut |cmd: &Command| {
-                        let b = if aa || area_aa && cmd.edge_flagged() {
-                            cmd.coverage_bounds()
-                        } else {
-                            cmd.bounds()
+                    objects.primitives(o, &mut |p: Primitive<'_>| {
+                        // A mesh triangle goes straight to the tile, unless
+                        // coverage AA needs its command's wider bounds.
+                        let made;
+                        let p = match p {
+                            Primitive::Mesh(t) if aa || area_aa => {
+                                made = t.command();
+                                Primitive::Command(&made)
+                            }
+                            p => p,
+                        };
+                        let (b, near) = match p {
+                            Primitive::Command(cmd) => (
+                                if aa || area_aa && cmd.edge_flagged() {
+                                    cmd.coverage_bounds()
+                                } else {
+                                    cmd.bounds()
+                                },
+                                nearest(cmd),
+                            ),
+                            Primitive::Mesh(t) => (t.bounds(), Some(t.nearest())),
                         };
                         let Some(b) = b.and_then(|b| b.intersect(&area)) else {
                             return;
                         };
+                        let near = near.map(|z| z.saturating_sub(2));
                         if early {
-                            if let Some(z) = nearest(cmd) {
+                            if let Some(z) = near {
                                 st.prims_tested += 1;
-                                let z = z.saturating_sub(2);
                                 if hiz.count(tile, b, z, true, 1, &mut st.cost) == 0 {
                                     st.prims_culled += 1;
                                     return;
                                 }
                             }
                         }
-                        tile.draw_valid(cmd, &[]);
+                        match p {
+                            Primitive::Command(cmd) => tile.draw_valid(cmd, &[]),
+                            Primitive::Mesh(t) => t.draw(tile),
+                        }
                         st.commands += 1;
                         if track {
-                            hiz.touch(&b);
+                            // Opaque, depth-tested triangles keep the
+                            // blocks' bounds; anything else marks them stale.
+                            match near {
+                                Some(z) => hiz.touch_near(&b, z),
+                                None => hiz.touch(&b),
+                            }
                         }
                     });
                 }
