@@ -481,6 +481,9 @@ struct Draw<'m, S> {
     /// front ones without reading or culling the others (the M4 teapot:
     /// half its triangles are back faces).
     front_bits: bool,
+    /// Where [`Scene::keep_clipped`] stored the draw's clipped pieces:
+    /// first slot and number of pieces (three slots each).
+    pieces: Option<(u32, u32)>,
 }
 
 /// A frame's 3D scene: camera, viewport, lights, up to `D` draws of
@@ -737,6 +740,7 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
             opts: *opts,
             lights,
             front_bits: bits && stats.clipped == 0,
+            pieces: None,
         });
         self.stats.add(&stats);
         Ok(stats)
@@ -760,6 +764,95 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
         }
     }
 
+    /// Clips draw `draw`'s clipped triangles once and keeps their pieces in
+    /// the vertex cache's free slots (three a piece), so that
+    /// [`each_primitive_of`](Self::each_primitive_of) hands them over as
+    /// [`Primitive::Mesh`] instead of clipping them again each time it is
+    /// called — the culling walk asks once per tile an object touches.
+    /// Returns whether they are kept: not for a draw whose triangles go as
+    /// commands (fast Phong), nor when the free slots are too few (then
+    /// nothing changes).
+    ///
+    /// ```
+    /// use tilerast::geometry::*;
+    /// use tilerast::prelude::*;
+    /// let mut bytes = [0u8; CUBE_BYTES];
+    /// let cube = Mesh::cube(&mut bytes)?;
+    /// let mut slots = [VertexSlot::EMPTY; 128];
+    /// let mut scene: Scene<'_, f32, 1> = Scene::new(&mut slots);
+    /// // The near plane cuts the cube's nearest corner off.
+    /// scene.set_camera(Mat4::look_at([1.5, 1.2, 2.5], [0.0; 3], [0.0, 1.0, 0.0])?,
+    ///                  Mat4::perspective(Angle::degrees(70), 1.0, 3.0, 20.0)?);
+    /// scene.set_viewport(Rect::new(0, 0, 32, 32))?;
+    /// let st = scene.draw(&cube, &Mat4::scale([1.0; 3]), &DrawOptions::default())?;
+    /// assert!(st.clipped > 0);
+    /// let all = |scene: &Scene<'_, f32, 1>| {
+    ///     let mut out = vec![];
+    ///     scene.each_primitive_of(0, |p| out.push(match p {
+    ///         Primitive::Mesh(t) => t.command(),
+    ///         Primitive::Command(c) => *c,
+    ///     }));
+    ///     out
+    /// };
+    /// let meshes = |scene: &Scene<'_, f32, 1>| {
+    ///     let mut n = 0;
+    ///     scene.each_primitive_of(0, |p| n += matches!(p, Primitive::Mesh(_)) as u32);
+    ///     n
+    /// };
+    /// let (before, m) = (all(&scene), meshes(&scene));
+    /// assert!(scene.keep_clipped(0));
+    /// assert_eq!(all(&scene), before); // the same triangles, in the same order
+    /// assert!(meshes(&scene) > m); // the clipped pieces now come from the cache
+    /// # Ok::<(), tilerast::Error>(())
+    /// ```
+    pub fn keep_clipped(&mut self, draw: usize) -> bool {
+        let Some(d) = self.draws.get(draw) else {
+            return false;
+        };
+        if d.pieces.is_some() {
+            return true;
+        }
+        if d.opts.shading != Shading::Gouraud && d.opts.lit {
+            return false;
+        }
+        let base = d.first as usize;
+        let mut at = self.used;
+        let mut pieces = 0u32;
+        for t in 0..d.mesh.triangles() {
+            let v = d.mesh.triangle(t).map(|i| &self.cache[base + i as usize]);
+            let (or, and) = (
+                v[0].v.code | v[1].v.code | v[2].v.code,
+                v[0].v.code & v[1].v.code & v[2].v.code,
+            );
+            if or & ALL == 0 || and & ALL != 0 {
+                continue;
+            }
+            // At most 7 pieces (a 9-gon's fan).
+            let mut kept: heapless::Vec<[MeshVertex; 3], 7> = heapless::Vec::new();
+            self.emit(d, t, |_| true, &mut |_, c: &Command| {
+                if let Command::Triangle { v, .. } = c {
+                    let _ = kept.push(v.each_ref().map(MeshVertex::of));
+                }
+            });
+            if at + 3 * kept.len() > self.cache.len() {
+                return false;
+            }
+            for piece in kept {
+                for mut v in piece {
+                    // The piece's triangle, for `each_primitive_of`'s order.
+                    v.spare = t;
+                    self.cache[at] = VertexSlot { v };
+                    at += 1;
+                }
+                pieces += 1;
+            }
+        }
+        let first = self.used as u32;
+        self.used = at;
+        self.draws[draw].pieces = Some((first, pieces));
+        true
+    }
+
     /// Calls `f` with every primitive of draw `draw`: what
     /// [`each_of`](Self::each_of) gives, with each unclipped Gouraud
     /// triangle as a [`Primitive::Mesh`] read in place from the vertex
@@ -773,7 +866,22 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
         let direct = !(d.opts.shading != Shading::Gouraud && d.opts.lit);
         let base = &self.cache[d.first as usize..];
         let shared = d.opts.state.tag == 0 || d.mesh.groups() == 1;
+        let state = |t: u16| {
+            if shared {
+                d.opts.state
+            } else {
+                tagged(&d.mesh, &d.opts.state, t)
+            }
+        };
         let sign = front_sign(&d.opts);
+        // The kept pieces of clipped triangles, in triangle order.
+        let mut pieces = match d.pieces {
+            Some((first, n)) => {
+                self.cache[first as usize..(first + 3 * n) as usize].chunks_exact(3)
+            }
+            None => [].chunks_exact(3),
+        };
+        let mut next = pieces.next();
         for t in 0..d.mesh.triangles() {
             if direct {
                 let v = d.mesh.triangle(t).map(|i| &base[i as usize]);
@@ -783,15 +891,20 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
                 );
                 if (or | and) & ALL == 0 {
                     if faces(area(&v), d.opts.cull, sign) {
-                        let state = if shared {
-                            d.opts.state
-                        } else {
-                            tagged(&d.mesh, &d.opts.state, t)
-                        };
                         f(Primitive::Mesh(MeshTriangle {
                             v: v.map(|s| &s.v),
-                            state,
+                            state: state(t),
                         }));
+                    }
+                    continue;
+                }
+                if d.pieces.is_some() {
+                    while let Some(p) = next.filter(|p| p[0].v.spare == t) {
+                        f(Primitive::Mesh(MeshTriangle {
+                            v: [&p[0].v, &p[1].v, &p[2].v],
+                            state: state(t),
+                        }));
+                        next = pieces.next();
                     }
                     continue;
                 }

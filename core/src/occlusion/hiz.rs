@@ -269,11 +269,11 @@ impl<const BLOCKS: usize, const SHIFT: u32> HiZ<BLOCKS, SHIFT> {
                 let b = by as usize * cols + bx as usize;
                 if self.min[b] <= self.max[b] && self.min[b] > z {
                     n += h * (ex.min((bx + 1) << SHIFT) - ox.max(bx << SHIFT));
+                    if n >= limit {
+                        return n;
+                    }
                 }
             }
-        }
-        if n >= limit {
-            return n;
         }
         let w = a.w as usize;
         for by in by0..=by1 {

@@ -284,6 +284,8 @@ impl<S: Real, const D: usize> MeshObjects<'_, '_, S, D> {
             let _ = self.scene.draw(mesh, model, &self.opts);
             self.prepared += 1;
             let d = if self.scene.draw_count() > before {
+                // Clipped once, not once per tile (when the cache has room).
+                self.scene.keep_clipped(before);
                 before as u16
             } else {
                 EMPTY
