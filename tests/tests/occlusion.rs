@@ -121,6 +121,19 @@ fn kd_tree_refuses_bad_input() {
     assert!(KdTree::<f32, 9>::build(&five).is_ok());
 }
 
+/// The pixels of `p` inside the tile whose depth is farther than `z`.
+fn brute_count<const N: usize, C: TileConfig>(tile: &Tile<N, C>, p: Rect, z: u16) -> u32 {
+    let mut n = 0;
+    for y in p.y..p.y + p.h as i32 {
+        for x in p.x..p.x + p.w as i32 {
+            if let Some(d) = tile.depth(x, y) {
+                n += (z < d) as u32;
+            }
+        }
+    }
+    n
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(64))]
 
@@ -183,14 +196,7 @@ proptest! {
             h5.touch(&r);
             for &(px, py, pw, ph, pz) in &probes {
                 let p = Rect::new(px, py, pw, ph);
-                let mut brute = 0;
-                for yy in p.y..p.y + p.h as i32 {
-                    for xx in p.x..p.x + p.w as i32 {
-                        if let Some(d) = tile.depth(xx, yy) {
-                            brute += (pz < d) as u32;
-                        }
-                    }
-                }
+                let brute = brute_count(&tile, p, pz);
                 let mut cost = TestCost::default();
                 let all = u32::MAX;
                 prop_assert_eq!(h2.count(&tile, p, pz, true, all, &mut cost), brute);
@@ -242,14 +248,7 @@ proptest! {
             h2.touch_near(&b, near);
             for &(px, py, pw, ph, pz) in &probes {
                 let p = Rect::new(px, py, pw, ph);
-                let mut brute = 0;
-                for yy in p.y..p.y + p.h as i32 {
-                    for xx in p.x..p.x + p.w as i32 {
-                        if let Some(d) = tile.depth(xx, yy) {
-                            brute += (pz < d) as u32;
-                        }
-                    }
-                }
+                let brute = brute_count(&tile, p, pz);
                 let mut cost = TestCost::default();
                 prop_assert_eq!(h3.count(&tile, p, pz, true, u32::MAX, &mut cost), brute);
                 prop_assert_eq!(h2.count(&tile, p, pz, true, u32::MAX, &mut cost), brute);

@@ -170,6 +170,30 @@ impl<const BLOCKS: usize, const SHIFT: u32> HiZ<BLOCKS, SHIFT> {
     /// # Ok::<(), Error>(())
     /// ```
     pub fn touch_near(&mut self, r: &Rect, z: u16) {
+        self.each_block_run(r, |min, max| {
+            for (lo, &hi) in min.iter_mut().zip(max.iter()) {
+                // (A stale block, `lo > hi`, stays stale.)
+                if *lo <= hi {
+                    *lo = (*lo).min(z);
+                }
+            }
+        });
+    }
+
+    /// Marks the blocks under `r` (screen pixels) stale: call it after
+    /// drawing anything inside `r` that may write depth.
+    pub fn touch(&mut self, r: &Rect) {
+        self.each_block_run(r, |min, max| {
+            min.fill(1);
+            max.fill(0);
+        });
+    }
+
+    /// Calls `f` with the nearest and farthest bounds of the blocks under
+    /// `r` (screen pixels), one block row at a time; not at all when the
+    /// summary is off or `r` misses the tile.
+    #[inline(always)]
+    fn each_block_run(&mut self, r: &Rect, mut f: impl FnMut(&mut [u16], &mut [u16])) {
         if !self.active {
             return;
         }
@@ -180,29 +204,7 @@ impl<const BLOCKS: usize, const SHIFT: u32> HiZ<BLOCKS, SHIFT> {
         for by in by0..=by1 {
             let row = (by * self.cols) as usize;
             let run = row + bx0 as usize..=row + bx1 as usize;
-            for (lo, &hi) in self.min[run.clone()].iter_mut().zip(&self.max[run]) {
-                // (A stale block, `lo > hi`, stays stale.)
-                if *lo <= hi {
-                    *lo = (*lo).min(z);
-                }
-            }
-        }
-    }
-
-    /// Marks the blocks under `r` (screen pixels) stale: call it after
-    /// drawing anything inside `r` that may write depth.
-    pub fn touch(&mut self, r: &Rect) {
-        if !self.active {
-            return;
-        }
-        let Some(r) = r.intersect(&self.area) else {
-            return;
-        };
-        let (bx0, by0, bx1, by1) = self.blocks(&r);
-        for by in by0..=by1 {
-            let row = (by * self.cols) as usize;
-            self.min[row + bx0 as usize..=row + bx1 as usize].fill(1);
-            self.max[row + bx0 as usize..=row + bx1 as usize].fill(0);
+            f(&mut self.min[run.clone()], &mut self.max[run]);
         }
     }
 
