@@ -451,3 +451,65 @@ proptest! {
         };
     }
 }
+
+/// A draw's primitives as commands: mesh triangles converted.
+fn primitives<S: Real>(scene: &Scene<'_, S>) -> Vec<Command> {
+    let mut out = vec![];
+    scene.each_primitive_of(0, |p| {
+        out.push(match p {
+            Primitive::Mesh(t) => t.command(),
+            Primitive::Command(c) => *c,
+        })
+    });
+    out
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+    /// The culling walk's primitives are the draw's commands, in order,
+    /// whether the clipped pieces are clipped on each call or kept in the
+    /// cache once (`Scene::keep_clipped`), for every cull mode, turn and
+    /// camera (near ones clip), in f32 and fixed point; with too few free
+    /// slots nothing is kept and nothing changes.
+    #[test]
+    fn kept_clipped_pieces_are_the_draws_commands(
+        turn in any::<u16>(),
+        cull in 0..3u8,
+        dist in 0.3f32..4.0,
+        height in -1.5f32..1.5,
+        fixed in any::<bool>(),
+    ) {
+        let mut buf = [0u8; spin::CUBE_BYTES];
+        let mesh = spin::cube(&mut buf).unwrap();
+        let cull = [Cull::Back, Cull::Front, Cull::None][cull as usize];
+        let eye = [0.2, height, dist];
+        fn check<S: Real>(mesh: &Mesh<'_>, eye: [f32; 3], turn: u16, cull: Cull, room: usize) -> Result<(), TestCaseError> {
+            let mut slots = vec![VertexSlot::EMPTY; 24 + room];
+            let Ok((mut scene, st)) = cube_scene::<S>(&mut slots, mesh, eye, [0.0; 3], turn, cull) else {
+                return Ok(());
+            };
+            if scene.draw_count() == 0 {
+                return Ok(());
+            }
+            let mut cmds = vec![];
+            scene.each_of(0, |c| cmds.push(*c));
+            prop_assert_eq!(&primitives(&scene), &cmds);
+            let kept = scene.keep_clipped(0);
+            prop_assert_eq!(&primitives(&scene), &cmds);
+            if room >= 3 * 7 * 12 {
+                prop_assert!(kept);
+            }
+            if st.clipped == 0 {
+                prop_assert!(kept);
+            }
+            Ok(())
+        }
+        for room in [0, 3, 3 * 7 * 12] {
+            if fixed {
+                check::<Fx>(&mesh, eye, turn, cull, room)?;
+            } else {
+                check::<f32>(&mesh, eye, turn, cull, room)?;
+            }
+        }
+    }
+}
