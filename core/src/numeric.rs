@@ -688,6 +688,42 @@ fn dot2_i16_by<const LONG: bool>(a: i32, k: i32, b: i32, l: i32) -> i64 {
     wide_mul_i_by::<LONG>(a, k) + wide_mul_i_by::<LONG>(b, l)
 }
 
+/// `a k + b l`, exactly, for `|a|, |b| < 2^30` (a plane's attribute
+/// differences: colour lanes below 2^24, depth below 2^30) and any `k`,
+/// `l` (its weights' steps). On the Cortex-M0 eight 32-bit products of
+/// 16-bit halves, summed before they are widened — one call for both
+/// products instead of two [`wide_mul_i`]s, each with its signs' fix-ups
+/// (the plane contract's set-up: eight a (tile, triangle) pair).
+#[inline(always)]
+pub(crate) fn dot2_wide(a: i32, k: i32, b: i32, l: i32) -> i64 {
+    dot2_wide_by::<LONG_MUL>(a, k, b, l)
+}
+
+#[inline(always)]
+fn dot2_wide_by<const LONG: bool>(a: i32, k: i32, b: i32, l: i32) -> i64 {
+    debug_assert!(a.unsigned_abs() < 1 << 30 && b.unsigned_abs() < 1 << 30);
+    if LONG {
+        return a as i64 * k as i64 + b as i64 * l as i64;
+    }
+    dot2_wide_pieces(a, k, b, l)
+}
+
+/// [`dot2_wide`] by 16-bit halves: `x = xh 2^16 + xl` with `xh` signed
+/// (`x >> 16`) and `xl` unsigned. With `|ah|, |bh| <= 2^14`: the high
+/// halves' products sum below 2^30, `ah kl + bh ll` below 2^31 in
+/// magnitude; `al kh` and `bl lh` each fit `i32` but not their sum; the
+/// low products each fit `u32`. Out of line on the Cortex-M0 (flash).
+#[cfg_attr(all(target_arch = "arm", not(target_has_atomic = "32")), inline(never))]
+fn dot2_wide_pieces(a: i32, k: i32, b: i32, l: i32) -> i64 {
+    let (ah, al, bh, bl) = (a >> 16, a & 0xffff, b >> 16, b & 0xffff);
+    let (kh, kl, lh, ll) = (k >> 16, k & 0xffff, l >> 16, l & 0xffff);
+    let hh = ah * kh + bh * lh;
+    let m1 = ah * kl + bh * ll;
+    let m2 = (al * kh) as i64 + (bl * lh) as i64;
+    let lo = (al as u32 * kl as u32) as u64 + (bl as u32 * ll as u32) as u64;
+    ((hh as i64) << 32) + ((m1 as i64 + m2) << 16) + lo as i64
+}
+
 /// `floor(x / 255)` for any `u32`, without a division: the colour scale's
 /// `/ 255` is a library call of ~90 instructions on the Cortex-M0 (nine
 /// per triangle and tile, measured); hosts and ARMv7-M keep the compiler's
@@ -1266,6 +1302,19 @@ mod tests {
                 assert_eq!(dot2_i16_by::<false>(a, k, b, l), exact, "{a} {k} {b} {l}");
                 assert_eq!(dot2_i16_by::<true>(a, k, b, l), exact, "{a} {k} {b} {l}");
             }
+            let m30 = |a: i32| (a >> 1).clamp(1 - (1 << 30), (1 << 30) - 1);
+            let (a30, b30) = (m30(a), m30(b));
+            let exact = a30 as i64 * k as i64 + b30 as i64 * l as i64;
+            assert_eq!(
+                dot2_wide_by::<false>(a30, k, b30, l),
+                exact,
+                "{a30} {k} {b30} {l}"
+            );
+            assert_eq!(
+                dot2_wide_by::<true>(a30, k, b30, l),
+                exact,
+                "{a30} {k} {b30} {l}"
+            );
             let g = (x as i64).rotate_left(k as u32 & 63) >> (b as u32 & 63);
             assert_eq!(
                 wrapping_mul_i32_by::<false>(g, k),

@@ -34,7 +34,10 @@ use crate::config::TileConfig;
 use crate::format::{Lanes, PixelFormat};
 use crate::fragment::BlendMode;
 use crate::geom::{pixel_span, MeshVertex};
-use crate::numeric::{div_floor_i32, Precision, LONG_MUL, SUBPIXEL_BITS, Z_FRAC};
+use crate::numeric::{
+    div_floor_i32, dot2_i16, dot2_wide, wrapping_mul_i32, Precision, LONG_MUL, SUBPIXEL_BITS,
+    Z_FRAC,
+};
 use crate::raster::coverage::AaMode;
 use crate::raster::span::SpanStart;
 use crate::setup::SMALL_EXTENT;
@@ -209,8 +212,19 @@ impl Recip {
         }
         let r = reciprocal46(area2 as u32) as i64;
         if m < 2 * area2 as u32 {
-            // Every step below 2^31: the common case, 32-bit steps.
-            let w = |k: i32| ((k as i64 * r + (1 << 15)) >> (46 - W_BITS)) as i32;
+            // Every step below 2^31: the common case, 32-bit steps. `k` is
+            // a multiple of 16 below 2^17: on the Cortex-M0 `k r` is
+            // `(k / 16) (16 r)`, two 32-bit products of a 15-bit factor
+            // ([`wrapping_mul_i32`]) instead of `__aeabi_lmul`.
+            let kr = |k: i32| {
+                if LONG_MUL {
+                    k as i64 * r
+                } else {
+                    debug_assert!(k % (1 << SUBPIXEL_BITS) == 0);
+                    wrapping_mul_i32(r << SUBPIXEL_BITS, k >> SUBPIXEL_BITS)
+                }
+            };
+            let w = |k: i32| ((kr(k) + (1 << 15)) >> (46 - W_BITS)) as i32;
             let rc = Recip {
                 wx: (w(a.0), w(a.1)),
                 wy: (w(s.0), w(s.1)),
@@ -317,22 +331,24 @@ impl Recip {
     /// ones — the same numbers.
     #[inline(always)]
     fn plane<const NARROW: bool>(&self, bits: u32, a0: i32, d1: i32, d2: i32) -> Plane {
-        let g = |w: (i32, i32)| {
-            (d1 as i64 * w.0 as i64 + d2 as i64 * w.1 as i64 + (1 << (bits - 1))) >> bits
-        };
+        // (`dot2_wide`: on the Cortex-M0 32-bit products of 16-bit halves,
+        // not the general 64x64-bit library multiply.)
+        let g = |w: (i32, i32)| (dot2_wide(d1, w.0, d2, w.1) + (1 << (bits - 1))) >> bits;
         let (gx, gy) = (g(self.wx), g(self.wy));
         // The anchor's value through the steps (as the exact contract's
         // small triangles: `crate::setup`): wrapping 64-bit products of the
         // whole steps, whose shifted low 32 bits are exact modulo 2^32 (a
         // sliver's step may not fit `i32`; the values inside it do).
         let round = 1 << (SUBPIXEL_BITS - 1);
+        // The anchor's offsets lie in the box (`|o| < 2^15` sub-pixels): on
+        // the Cortex-M0 `dot2_i16` is four 32-bit products and
+        // `wrapping_mul_i32` two.
         let off = if NARROW {
             debug_assert!(gx as i32 as i64 == gx && gy as i32 as i64 == gy);
-            let (gx, gy) = (gx as i32 as i64, gy as i32 as i64);
-            (gx * self.o.0 as i64 + gy * self.o.1 as i64 + round) >> SUBPIXEL_BITS
+            (dot2_i16(gx as i32, self.o.0, gy as i32, self.o.1) + round) >> SUBPIXEL_BITS
         } else {
-            gx.wrapping_mul(self.o.0 as i64)
-                .wrapping_add(gy.wrapping_mul(self.o.1 as i64))
+            wrapping_mul_i32(gx, self.o.0)
+                .wrapping_add(wrapping_mul_i32(gy, self.o.1))
                 .wrapping_add(round)
                 >> SUBPIXEL_BITS
         };
