@@ -40,7 +40,7 @@ use core::ops::Range;
 use crate::command::{Blend, Command, Cull, QuadVertex, SpanCmd, State, Vertex};
 use crate::error::Error;
 use crate::format::Rgb;
-use crate::geom::Rect;
+use crate::geom::{MeshVertex, Rect};
 use crate::numeric::{ColorFix, ColorStep, Coord, ZFix, ZStep};
 use crate::raster::line::{EdgeCmd, LineCmd, LineStyle, Side};
 use crate::texture::TexVertex;
@@ -632,6 +632,34 @@ impl MeshCursor<'_> {
         })
     }
 
+    /// The triangle at `at` in the compact form the tile's mesh path
+    /// draws ([`Tile::draw_mesh_triangle`](crate::tile::Tile)), for a
+    /// record whose vertices carry no α: the same vertices as
+    /// [`Self::triangle`]'s command.
+    #[inline(always)]
+    fn mesh_triangle(&self, at: usize) -> Result<[MeshVertex; 3], Error> {
+        debug_assert!(!self.alpha);
+        let i = self.indices_of::<MESH_VERTEX>(at)?;
+        let read = |i: u16| {
+            let at = i as usize * MESH_VERTEX;
+            // `indices_of` checked that the chunk lies in the list.
+            let c: &[u8; MESH_VERTEX] = self
+                .vertices
+                .get(at..at + MESH_VERTEX)
+                .and_then(|c| c.try_into().ok())
+                .unwrap_or(&[0; MESH_VERTEX]);
+            MeshVertex {
+                x: i16::from_le_bytes([c[0], c[1]]) as i32,
+                y: i16::from_le_bytes([c[2], c[3]]) as i32,
+                z: u16::from_le_bytes([c[4], c[5]]),
+                rgb: [c[6], c[7], c[8]],
+                code: 0,
+                spare: 0,
+            }
+        };
+        Ok([read(i[0]), read(i[1]), read(i[2])])
+    }
+
     /// The vertex indices of the triangle at `at`, each checked to name a
     /// whole vertex of `S` bytes (one range check for the three).
     #[inline(always)]
@@ -1086,6 +1114,57 @@ impl crate::frame::CommandSource for Encoded<'_> {
     }
 
     fn replay(&self, keys: impl Iterator<Item = u32>, mut f: impl FnMut(&Command)) {
+        self.replay_items(keys, |item| match item {
+            Item::Triangle(m, at) => {
+                if let Ok(cmd) = m.triangle(at) {
+                    f(&cmd);
+                }
+            }
+            Item::Command(cmd) => f(cmd),
+        });
+    }
+
+    /// Mesh triangles go to the tile's mesh path as their compact vertices
+    /// ([`MeshVertex`]), not as decoded commands: under the plane contract
+    /// ([`PlaneContract`](crate::numeric::PlaneContract)) the fused
+    /// routine draws them; under the exact contract the tile turns them
+    /// back into the same commands, so the pixels are those of
+    /// [`Self::replay`]. Records whose vertices carry α keep the command
+    /// path.
+    fn draw_keys<const N: usize, C: crate::config::TileConfig>(
+        &self,
+        keys: impl Iterator<Item = u32>,
+        tile: &mut crate::tile::Tile<N, C>,
+    ) -> u32 {
+        let mut n = 0;
+        self.replay_items(keys, |item| match item {
+            Item::Triangle(m, at) if !m.alpha => {
+                if let Ok([a, b, c]) = m.mesh_triangle(at) {
+                    tile.draw_mesh_triangle([&a, &b, &c], &m.state);
+                    n += 1;
+                }
+            }
+            Item::Triangle(m, at) => {
+                if let Ok(cmd) = m.triangle(at) {
+                    tile.draw_valid(&cmd, &[]);
+                    n += 1;
+                }
+            }
+            Item::Command(cmd) => {
+                tile.draw_valid(cmd, &[]);
+                n += 1;
+            }
+        });
+        n
+    }
+}
+
+impl Encoded<'_> {
+    /// [`CommandSource::replay`](crate::frame::CommandSource::replay)'s
+    /// walk: calls `f` with the item of each key, in order (a mesh
+    /// triangle undecoded).
+    #[inline(always)]
+    fn replay_items(&self, keys: impl Iterator<Item = u32>, mut f: impl FnMut(Item<'_, '_>)) {
         let all = self.0;
         // A record start at or before every key still to come, and the key
         // of its first command.
@@ -1099,9 +1178,7 @@ impl crate::frame::CommandSource for Encoded<'_> {
             if let Some((m, first, n)) = &mesh {
                 let k = key.wrapping_sub(*first);
                 if k < *n {
-                    if let Ok(cmd) = m.triangle(6 * k) {
-                        f(&cmd);
-                    }
+                    f(Item::Triangle(m, 6 * k));
                     continue;
                 }
             }
@@ -1114,9 +1191,7 @@ impl crate::frame::CommandSource for Encoded<'_> {
                     pos += n;
                     next += count;
                     if key < next {
-                        if let Ok(cmd) = m.triangle(6 * (key - first)) {
-                            f(&cmd);
-                        }
+                        f(Item::Triangle(&m, 6 * (key - first)));
                         mesh = Some((m, first, count));
                         break;
                     }
@@ -1125,7 +1200,7 @@ impl crate::frame::CommandSource for Encoded<'_> {
                     pos += n;
                     next += 1;
                     if next - 1 == key {
-                        f(&cmd);
+                        f(Item::Command(&cmd));
                         break;
                     }
                 }

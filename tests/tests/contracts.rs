@@ -93,6 +93,46 @@ fn the_fused_mesh_path_draws_what_the_commands_draw() {
     }
 }
 
+/// An encoded mesh record (`tilerast::wire`, what the firmware's scenes
+/// are) replays its triangles to the tile's mesh path, undecoded: the same
+/// pixels and depths as its triangles drawn as commands, under each
+/// contract and in several tilings.
+#[test]
+fn an_encoded_mesh_draws_what_its_commands_draw() {
+    use tilerast::wire::{encode_mesh, Encoded};
+    let mesh = Mesh::parse(teapot()).unwrap();
+    let mut slots = vec![VertexSlot::EMPTY; mesh.vertices() as usize];
+    for turn in [0u16, 21000, 47000] {
+        let s = scene(&mut slots, &mesh, turn);
+        let cmds = commands(&s);
+        let (mut verts, mut tris) = (vec![], vec![]);
+        for c in &cmds {
+            let Command::Triangle { v, state } = c else {
+                panic!("not a Gouraud triangle: {c:?}");
+            };
+            assert_eq!(*state, State::default());
+            let k = verts.len() as u16;
+            verts.extend_from_slice(v);
+            tris.push([k, k + 1, k + 2]);
+        }
+        let mut buf = vec![0u8; 16 * verts.len() + 8 * tris.len() + 64];
+        let n = encode_mesh(&verts, &tris, &State::default(), &mut buf).unwrap();
+        let enc = Encoded(&buf[..n]);
+        for (tw, th) in [(32, 16), (64, 64), (7, 5)] {
+            assert_eq!(
+                render::<Exact, _>(&enc, tw, th),
+                render::<Exact, _>(&cmds[..], tw, th),
+                "exact, turn {turn}, tiles {tw}x{th}"
+            );
+            assert_eq!(
+                render::<Fast, _>(&enc, tw, th),
+                render::<Fast, _>(&cmds[..], tw, th),
+                "plane, turn {turn}, tiles {tw}x{th}"
+            );
+        }
+    }
+}
+
 #[test]
 fn the_plane_contract_is_within_one_unit_of_the_exact_one() {
     let mesh = Mesh::parse(teapot()).unwrap();
