@@ -35,8 +35,8 @@ use crate::format::{Lanes, PixelFormat};
 use crate::fragment::BlendMode;
 use crate::geom::{pixel_span, MeshVertex};
 use crate::numeric::{
-    div_floor_i32, dot2_i16, dot2_wide, wrapping_mul_i32, Precision, LONG_MUL, SUBPIXEL_BITS,
-    Z_FRAC,
+    div_floor_i32, dot2_i16, dot2_wide, wide_mul, wrapping_mul_i32, Precision, LONG_MUL,
+    SUBPIXEL_BITS, Z_FRAC,
 };
 use crate::raster::coverage::AaMode;
 use crate::raster::span::SpanStart;
@@ -182,8 +182,22 @@ const W_SPREAD_BITS: u32 = W_BITS + 8;
 /// `floor((2^46 - 1) / a)` for `0 < a < 2^16`, by three 32-bit divisions
 /// (16-bit digits of long division): at least 2^30, so within 2^-30 of
 /// `2^46 / a`.
+///
+/// On a core without a divide instruction (the Cortex-M0, where each
+/// 32-bit division is a library call of about 130 instructions) one
+/// division instead of three ([`reciprocal46_m0`]).
 #[inline(always)]
 pub(crate) fn reciprocal46(a: u32) -> u64 {
+    reciprocal46_by::<{ LONG_MUL }>(a)
+}
+
+/// [`reciprocal46`] by three divisions (`DIV`) or by the Cortex-M0's route
+/// (the tests run both).
+#[inline(always)]
+fn reciprocal46_by<const DIV: bool>(a: u32) -> u64 {
+    if !DIV {
+        return reciprocal46_m0(a);
+    }
     debug_assert!(a > 0 && a < PLANE_AREA_LIMIT as u32);
     const HI: u32 = (1 << 14) - 1;
     let q1 = HI / a;
@@ -191,6 +205,26 @@ pub(crate) fn reciprocal46(a: u32) -> u64 {
     let q2 = n2 / a;
     let q3 = (((n2 - q2 * a) << 16) | 0xffff) / a;
     (q1 as u64) << 32 | (q2 as u64) << 16 | q3 as u64
+}
+
+/// [`reciprocal46`] from one division: `R = floor((2^32 - 1) / a)`, so
+/// `q0 = R 2^14` falls short of the quotient by less than `2^14 + 1`
+/// (`R a <= 2^32 - 1`, a 32-bit product), and the remainder
+/// `m = 2^46 - 1 - q0 a = (2^32 - 1 - R a) 2^14 + 2^14 - 1` is below
+/// `2^30 + 2^14`. Its quotient by `a` is `t = floor(m R / 2^32)` (one
+/// 32x32-bit high product of 16-bit pieces) or at most two more, since
+/// `m / a - m R / 2^32 < m (1 + 1/a) / 2^32 < 1`.
+#[cfg_attr(all(target_arch = "arm", not(target_has_atomic = "32")), inline(never))]
+fn reciprocal46_m0(a: u32) -> u64 {
+    debug_assert!(a > 0 && a < PLANE_AREA_LIMIT as u32);
+    let r = u32::MAX / a;
+    let m = ((u32::MAX - r * a) << 14) | ((1 << 14) - 1);
+    let mut t = (wide_mul(m, r) >> 32) as u32;
+    let mut left = m - t * a;
+    while left >= a {
+        (t, left) = (t + 1, left - a);
+    }
+    ((r as u64) << 14) + t as u64
 }
 
 impl Recip {
@@ -797,7 +831,9 @@ mod tests {
             .step_by(7)
             .chain([1, 2, 3, 65535])
         {
-            assert_eq!(reciprocal46(a), ((1u64 << 46) - 1) / a as u64, "{a}");
+            let want = ((1u64 << 46) - 1) / a as u64;
+            assert_eq!(reciprocal46_by::<true>(a), want, "{a}");
+            assert_eq!(reciprocal46_by::<false>(a), want, "{a}");
         }
     }
 }
