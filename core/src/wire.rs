@@ -1102,15 +1102,21 @@ impl crate::frame::CommandSource for Encoded<'_> {
         mut f: impl FnMut(u32, Option<Rect>),
     ) -> Result<(), Error> {
         // A mesh triangle's colours and depths are not decoded, nor its x
-        // when its y misses `rows`.
-        self.walk(|key, item| {
-            let b = match item {
-                Item::Triangle(m, at) => m.bounds(at, cells, &rows, cull)?,
-                Item::Command(cmd) => crate::frame::bin_bounds(cmd, cells, area, cull),
-            };
-            f(key, b);
-            Ok(())
-        })
+        // when its y misses `rows`. Inlined into the walk: out of line, at
+        // the micro:bit's `opt-level = "s"`, each triangle paid a call and
+        // a 100-byte frame (its demo bins in four passes, each visiting
+        // every triangle).
+        self.walk(
+            #[inline(always)]
+            |key, item| {
+                let b = match item {
+                    Item::Triangle(m, at) => m.bounds(at, cells, &rows, cull)?,
+                    Item::Command(cmd) => crate::frame::bin_bounds(cmd, cells, area, cull),
+                };
+                f(key, b);
+                Ok(())
+            },
+        )
     }
 
     fn replay(&self, keys: impl Iterator<Item = u32>, mut f: impl FnMut(&Command)) {
