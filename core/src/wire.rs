@@ -592,12 +592,7 @@ impl MeshCursor<'_> {
     /// cost a test per vertex (measured: the M4 teapot's binning).
     #[inline(always)]
     fn vertex<const S: usize>(&self, i: u16) -> Vertex {
-        let at = i as usize * S;
-        let c: &[u8; S] = self
-            .vertices
-            .get(at..at + S)
-            .and_then(|c| c.try_into().ok())
-            .unwrap_or(&[0; S]);
+        let c = self.chunk::<S>(i);
         Vertex::new(
             Coord::from_bits(i16::from_le_bytes([c[0], c[1]]) as i32),
             Coord::from_bits(i16::from_le_bytes([c[2], c[3]]) as i32),
@@ -605,6 +600,17 @@ impl MeshCursor<'_> {
             Rgb::new(c[6], c[7], c[8]),
         )
         .with_alpha(if S > MESH_VERTEX { c[S - 1] } else { 255 })
+    }
+
+    /// Vertex `i`'s `S` bytes (zeros past the list, which the callers'
+    /// index checks rule out).
+    #[inline(always)]
+    fn chunk<const S: usize>(&self, i: u16) -> &[u8; S] {
+        let at = i as usize * S;
+        self.vertices
+            .get(at..at + S)
+            .and_then(|c| c.try_into().ok())
+            .unwrap_or(&[0; S])
     }
 
     /// The triangle whose indices start `at` bytes into the index list
@@ -641,13 +647,8 @@ impl MeshCursor<'_> {
         debug_assert!(!self.alpha);
         let i = self.indices_of::<MESH_VERTEX>(at)?;
         let read = |i: u16| {
-            let at = i as usize * MESH_VERTEX;
             // `indices_of` checked that the chunk lies in the list.
-            let c: &[u8; MESH_VERTEX] = self
-                .vertices
-                .get(at..at + MESH_VERTEX)
-                .and_then(|c| c.try_into().ok())
-                .unwrap_or(&[0; MESH_VERTEX]);
+            let c = self.chunk::<MESH_VERTEX>(i);
             MeshVertex {
                 x: i16::from_le_bytes([c[0], c[1]]) as i32,
                 y: i16::from_le_bytes([c[2], c[3]]) as i32,

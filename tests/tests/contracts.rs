@@ -74,37 +74,41 @@ fn commands(scene: &Scene<'_, f32, 1>) -> Vec<Command> {
     cmds
 }
 
-#[test]
-fn the_fused_mesh_path_draws_what_the_commands_draw() {
-    let mesh = Mesh::parse(teapot()).unwrap();
-    let mut slots = vec![VertexSlot::EMPTY; mesh.vertices() as usize];
-    for turn in [0u16, 9000, 30000] {
-        let s = scene(&mut slots, &mesh, turn);
-        let cmds = commands(&s);
-        assert!(cmds.len() > 1000);
-        assert_eq!(
-            render::<Exact, _>(&s, 32, 16),
-            render::<Exact, _>(&cmds[..], 32, 16)
-        );
-        assert_eq!(
-            render::<Fast, _>(&s, 32, 16),
-            render::<Fast, _>(&cmds[..], 32, 16)
-        );
-    }
+/// Asserts that `a` and `b` draw the same pixels and depths in tiles of
+/// `tiles`, under each contract.
+fn assert_same_draw<A: CommandSource + ?Sized, B: CommandSource + ?Sized>(
+    a: &A,
+    b: &B,
+    (tw, th): (u16, u16),
+    what: &str,
+) {
+    assert_eq!(
+        render::<Exact, _>(a, tw, th),
+        render::<Exact, _>(b, tw, th),
+        "exact, {what}"
+    );
+    assert_eq!(
+        render::<Fast, _>(a, tw, th),
+        render::<Fast, _>(b, tw, th),
+        "plane, {what}"
+    );
 }
 
-/// An encoded mesh record (`tilerast::wire`, what the firmware's scenes
-/// are) replays its triangles to the tile's mesh path, undecoded: the same
-/// pixels and depths as its triangles drawn as commands, under each
-/// contract and in several tilings.
+/// The geometry stage's fused mesh path (vertex cache -> tile) and an
+/// encoded mesh record (`tilerast::wire`, what the firmware's scenes are,
+/// replayed to the tile's mesh path undecoded) draw the same pixels and
+/// depths as their triangles drawn as commands, under each contract and in
+/// several tilings.
 #[test]
-fn an_encoded_mesh_draws_what_its_commands_draw() {
+fn the_mesh_paths_draw_what_the_commands_draw() {
     use tilerast::wire::{encode_mesh, Encoded};
     let mesh = Mesh::parse(teapot()).unwrap();
     let mut slots = vec![VertexSlot::EMPTY; mesh.vertices() as usize];
-    for turn in [0u16, 21000, 47000] {
+    for turn in [0u16, 9000, 30000, 47000] {
         let s = scene(&mut slots, &mesh, turn);
         let cmds = commands(&s);
+        assert!(cmds.len() > 1000);
+        assert_same_draw(&s, &cmds[..], (32, 16), &format!("scene, turn {turn}"));
         let (mut verts, mut tris) = (vec![], vec![]);
         for c in &cmds {
             let Command::Triangle { v, state } = c else {
@@ -118,17 +122,9 @@ fn an_encoded_mesh_draws_what_its_commands_draw() {
         let mut buf = vec![0u8; 16 * verts.len() + 8 * tris.len() + 64];
         let n = encode_mesh(&verts, &tris, &State::default(), &mut buf).unwrap();
         let enc = Encoded(&buf[..n]);
-        for (tw, th) in [(32, 16), (64, 64), (7, 5)] {
-            assert_eq!(
-                render::<Exact, _>(&enc, tw, th),
-                render::<Exact, _>(&cmds[..], tw, th),
-                "exact, turn {turn}, tiles {tw}x{th}"
-            );
-            assert_eq!(
-                render::<Fast, _>(&enc, tw, th),
-                render::<Fast, _>(&cmds[..], tw, th),
-                "plane, turn {turn}, tiles {tw}x{th}"
-            );
+        for tiles in [(32, 16), (64, 64), (7, 5)] {
+            let what = format!("encoded, turn {turn}, tiles {tiles:?}");
+            assert_same_draw(&enc, &cmds[..], tiles, &what);
         }
     }
 }
