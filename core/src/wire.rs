@@ -1131,13 +1131,13 @@ impl crate::frame::CommandSource for Encoded<'_> {
         });
     }
 
-    /// Mesh triangles go to the tile's mesh path as their compact vertices
-    /// ([`MeshVertex`]), not as decoded commands: under the plane contract
+    /// Mesh triangles go to the tile's mesh path as their compact vertices,
+    /// not as decoded commands: under the plane contract
     /// ([`PlaneContract`](crate::numeric::PlaneContract)) the fused
     /// routine draws them; under the exact contract the tile turns them
     /// back into the same commands, so the pixels are those of
-    /// [`Self::replay`]. Records whose vertices carry α keep the command
-    /// path.
+    /// [`replay`](crate::frame::CommandSource::replay). Records whose
+    /// vertices carry α keep the command path.
     fn draw_keys<const N: usize, C: crate::config::TileConfig>(
         &self,
         keys: impl Iterator<Item = u32>,
