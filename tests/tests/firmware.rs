@@ -1060,7 +1060,11 @@ fn report(reports: &[BoardResult], v6: &Report) -> String {
            binning passes (each decodes every command); *decode*: reading each tile's binned \
            commands in place; *setup*: triangle setup; *traverse*: the rows each triangle covers; \
            *span and rest*: per-row restart, span loops, fragment tests and stores, the other \
-           commands. *Flush*: the label and the flush, from the frame above. Millions of instructions.\n\n\
+           commands. *Flush*: the label and the flush, from the frame above. \
+           The demo draws its mesh under the plane contract: the partial renders reach its \
+           triangles as commands (the exact contract's decode, setup and traversal), the whole \
+           frame through the fused mesh path, which does all three in one routine, so its *span \
+           and rest* is only what the whole frame saves or adds beyond them. Millions of instructions.\n\n\
            | board | scene | bin | clear | decode | setup | traverse | span and rest | flush | total | bin passes | bin entries (peak) | tiles unbinned | (tile, command) pairs |\n\
            | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
     for b in &boards {
