@@ -85,12 +85,7 @@ pub trait CommandSource {
         keys: impl Iterator<Item = u32>,
         tile: &mut Tile<N, C>,
     ) -> u32 {
-        let mut n = 0;
-        self.replay(keys, |cmd| {
-            tile.draw_valid(cmd, self.textures());
-            n += 1;
-        });
-        n
+        replay_commands(self, keys, tile)
     }
     /// The textures the source's textured triangles index
     /// ([`WithTextures`]); none by default.
@@ -164,6 +159,22 @@ pub(crate) fn bin_bounds(cmd: &Command, cells: bool, area: bool, cull: Cull) -> 
     } else {
         cmd.bounds()
     }
+}
+
+/// [`CommandSource::draw_keys`]' default: each key's command replayed
+/// and drawn; how many were drawn.
+#[inline(always)]
+pub(crate) fn replay_commands<S: CommandSource + ?Sized, const N: usize, C: TileConfig>(
+    src: &S,
+    keys: impl Iterator<Item = u32>,
+    tile: &mut Tile<N, C>,
+) -> u32 {
+    let mut n = 0;
+    src.replay(keys, |cmd| {
+        tile.draw_valid(cmd, src.textures());
+        n += 1;
+    });
+    n
 }
 
 impl CommandSource for [Command] {

@@ -1147,14 +1147,10 @@ impl crate::frame::CommandSource for Encoded<'_> {
         keys: impl Iterator<Item = u32>,
         tile: &mut crate::tile::Tile<N, C>,
     ) -> u32 {
-        let mut n = 0;
         if !<C::Precision as crate::numeric::Precision>::PLANE {
-            self.replay(keys, |cmd| {
-                tile.draw_valid(cmd, &[]);
-                n += 1;
-            });
-            return n;
+            return crate::frame::replay_commands(self, keys, tile);
         }
+        let mut n = 0;
         self.replay_items(keys, |item| match item {
             Item::Triangle(m, at) if !m.alpha => {
                 if let Ok([a, b, c]) = m.mesh_triangle(at) {
