@@ -192,6 +192,27 @@ fn apt_install(packages: &[&str]) -> Result<(), String> {
     apt(&["update", "-qq"])?;
     let mut install = vec!["install", "-y", "-qq"];
     install.extend_from_slice(packages);
+    if apt(&install).is_ok() {
+        return Ok(());
+    }
+    // A machine image may carry a newer QEMU package than its release
+    // (seen: `qemu-utils` 10.0 from bookworm-backports, with no backports
+    // source), which `Breaks:` the release's `qemu-system-common`. Retry
+    // with every installed QEMU package at the release's own version.
+    let release = output("sh", &["-c", ". /etc/os-release && echo $VERSION_CODENAME"]);
+    let installed = output(
+        "dpkg-query",
+        &["-W", "-f", "${Package} ${Status}\\n", "qemu-*"],
+    );
+    let pinned: Vec<String> = installed
+        .lines()
+        .filter(|l| l.ends_with(" installed"))
+        .filter_map(|l| l.split(' ').next())
+        .map(|p| format!("{p}/{}", release.trim()))
+        .collect();
+    eprintln!("xtask: retrying with the release's QEMU packages: {pinned:?}");
+    install.push("--allow-downgrades");
+    install.extend(pinned.iter().map(String::as_str));
     apt(&install)
 }
 
