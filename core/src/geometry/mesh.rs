@@ -292,6 +292,24 @@ impl<'a> Mesh<'a> {
             },
         }
     }
+    /// Every triangle's vertex indices, in order: [`Self::triangle`] of
+    /// `0..triangles()` read as one slice, with no bounds check a triangle
+    /// (the vertex stage's cull loop reads all of them every frame).
+    #[inline]
+    pub(crate) fn triangle_list(&self) -> impl Iterator<Item = [u16; 3]> + '_ {
+        let end = self.tris + 6 * self.nt as usize;
+        self.bytes
+            .get(self.tris..end)
+            .unwrap_or(&[])
+            .chunks_exact(6)
+            .map(|s| {
+                [
+                    u16::from_le_bytes([s[0], s[1]]),
+                    u16::from_le_bytes([s[2], s[3]]),
+                    u16::from_le_bytes([s[4], s[5]]),
+                ]
+            })
+    }
     /// The vertex indices of triangle `t` (`[0; 3]` past the end).
     #[inline]
     pub fn triangle(&self, t: u16) -> [u16; 3] {

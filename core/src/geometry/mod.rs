@@ -633,70 +633,31 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
 
         // 2. Transform and project every vertex into the cache. When no
         // position can overflow (the rows' absolute sums are small, checked
-        // once), the per-vertex finiteness test is skipped.
+        // once), the per-vertex finiteness test is skipped; when the whole
+        // box lies inside the guard band and depth range
+        // ([`clip::box_inside`]), so does every vertex and its outcode is
+        // not computed (the same numbers: 0).
         let mvp = q15_matrix(&mvp);
         let bounded = bounded(&mvp);
         let first = self.used;
         let vp = self.viewport;
         let cache = &mut self.cache[first..first + nv];
-        for (i, slot) in cache.iter_mut().enumerate() {
-            let q = mesh.position(i as u16);
-            let p = mvp.m.map(|row| S::affine_q15(&row, q, bounded));
-            if !bounded && !p.iter().all(|v| v.is_finite()) {
-                return Err(DrawError::NotFinite { vertex: i as u16 });
-            }
-            let mut code = clip::outcode(&p, vp.guard);
-            *slot = VertexSlot::EMPTY;
-            if code == 0 {
-                match vp.project(&p) {
-                    Some((x, y, z)) => (slot.v.x, slot.v.y, slot.v.z) = (x, y, z),
-                    // Inside the guard band yet not representable: only a
-                    // w next to 0, i.e. a degenerate projection.
-                    None => code = ALL,
-                }
-            }
-            slot.v.code = code;
+        let inside = bounded
+            && clip::box_inside(&mvp.m, vp.guard)
+            && project_all::<S, true>(mesh, &mvp, true, &vp, cache)?;
+        if !inside {
+            project_all::<S, false>(mesh, &mvp, bounded, &vp, cache)?;
         }
         stats.vertices = nv as u32;
 
         // 3. Cull and mark the vertices visible triangles use; note the
         // front triangles in the cache's spare bits (16 a slot) when they
         // fit, so binning walks only them ([`Draw::front_bits`]).
-        let front_sign = front_sign(opts);
         let bits = mesh.triangles() as usize <= 16 * nv;
-        let nt = mesh.triangles();
-        for w in 0..nt.div_ceil(16) {
-            let mut word = 0u16;
-            // (In u32: the last word of a 65,535-triangle mesh ends past
-            // u16.)
-            for t in (w as u32 * 16..(w as u32 * 16 + 16).min(nt as u32)).map(|t| t as u16) {
-                let idx = mesh.triangle(t);
-                let v = idx.map(|i| &cache[i as usize]);
-                let (or, and) = (
-                    v[0].v.code | v[1].v.code | v[2].v.code,
-                    v[0].v.code & v[1].v.code & v[2].v.code,
-                );
-                if and & ALL != 0 {
-                    stats.outside += 1;
-                    continue;
-                }
-                if or & ALL == 0 {
-                    if !faces(area(&v), opts.cull, front_sign) {
-                        stats.culled += 1;
-                        continue;
-                    }
-                    stats.front += 1;
-                    word |= 1 << (t % 16);
-                } else {
-                    stats.clipped += 1;
-                }
-                for i in idx {
-                    cache[i as usize].v.code |= USED;
-                }
-            }
-            if bits {
-                cache[w as usize].v.spare = word;
-            }
+        if inside {
+            mark_used::<true>(mesh, cache, opts, bits, &mut stats);
+        } else {
+            mark_used::<false>(mesh, cache, opts, bits, &mut stats);
         }
 
         // 4. Light the marked vertices, group by group, in model space.
@@ -1181,6 +1142,114 @@ fn bounded<S: Real>(m: &Mat4<S>) -> bool {
         let sum = (abs(r[0]) + abs(r[1]) + abs(r[2])) * q + abs(r[3]);
         sum.is_finite() && sum < lim
     })
+}
+
+/// Step 2 of [`Scene::draw`]: every vertex of `mesh` through `mvp`
+/// ([`q15_matrix`]'s form) into `cache`, with its outcode and, when
+/// inside, its projection. `INSIDE`: the caller found the mesh's box
+/// inside ([`clip::box_inside`]), so every outcode is 0 and none is
+/// computed; `Ok(false)` then when a projection failed all the same (a
+/// degenerate `w`), and the caller runs the general form.
+#[inline(always)]
+fn project_all<S: Real, const INSIDE: bool>(
+    mesh: &Mesh<'_>,
+    mvp: &Mat4<S>,
+    bounded: bool,
+    vp: &View<S>,
+    cache: &mut [VertexSlot],
+) -> Result<bool, DrawError> {
+    for (i, slot) in cache.iter_mut().enumerate() {
+        let q = mesh.position(i as u16);
+        let p = mvp.m.map(|row| S::affine_q15(&row, q, bounded));
+        if !bounded && !p.iter().all(|v| v.is_finite()) {
+            return Err(DrawError::NotFinite { vertex: i as u16 });
+        }
+        let code = if INSIDE {
+            0
+        } else {
+            clip::outcode(&p, vp.guard)
+        };
+        // Built whole, stored once.
+        let mut v = VertexSlot::EMPTY.v;
+        v.code = code;
+        if code == 0 {
+            match vp.project(&p) {
+                Some((x, y, z)) => (v.x, v.y, v.z) = (x, y, z),
+                // Inside the guard band yet not representable: only a
+                // w next to 0, i.e. a degenerate projection.
+                None if INSIDE => return Ok(false),
+                None => v.code = ALL,
+            }
+        }
+        slot.v = v;
+    }
+    Ok(true)
+}
+
+/// Step 3 of [`Scene::draw`]: culls `mesh`'s triangles against the
+/// projected `cache`, marks the vertices of the drawn ones [`USED`], counts
+/// them in `stats` and, with `bits`, notes the front ones in the slots'
+/// spare bits. `INSIDE`: every vertex's outcode is 0 ([`project_all`]),
+/// so no triangle is outside or clipped and none is tested.
+#[inline(always)]
+fn mark_used<const INSIDE: bool>(
+    mesh: &Mesh<'_>,
+    cache: &mut [VertexSlot],
+    opts: &DrawOptions,
+    bits: bool,
+    stats: &mut DrawStats,
+) {
+    let front_sign = front_sign(opts);
+    // Counted in locals (registers), added once; the culled ones are the
+    // rest.
+    let (mut outside, mut front, mut clipped) = (0, 0, 0);
+    let mut word = 0u16;
+    for (t, idx) in mesh.triangle_list().enumerate() {
+        let v = idx.map(|i| &cache[i as usize]);
+        let (or, and) = if INSIDE {
+            (0, 0)
+        } else {
+            (
+                v[0].v.code | v[1].v.code | v[2].v.code,
+                v[0].v.code & v[1].v.code & v[2].v.code,
+            )
+        };
+        let used = if and & ALL != 0 {
+            outside += 1;
+            false
+        } else if or & ALL == 0 {
+            let drawn = faces(area(&v), opts.cull, front_sign);
+            if drawn {
+                front += 1;
+                word |= 1 << (t % 16);
+            }
+            drawn
+        } else {
+            clipped += 1;
+            true
+        };
+        if used {
+            for i in idx {
+                // (Inside, every code is 0 or `USED` already: a store.)
+                let c = &mut cache[i as usize].v.code;
+                *c = if INSIDE { USED } else { *c | USED };
+            }
+        }
+        if t % 16 == 15 {
+            if bits {
+                cache[t / 16].v.spare = word;
+            }
+            word = 0;
+        }
+    }
+    let nt = mesh.triangles() as usize;
+    if bits && nt % 16 != 0 {
+        cache[nt / 16].v.spare = word;
+    }
+    stats.outside += outside;
+    stats.culled += mesh.triangles() as u32 - outside - front - clipped;
+    stats.front += front;
+    stats.clipped += clipped;
 }
 
 /// Twice the signed screen area (y down), sub-pixels squared.
