@@ -662,26 +662,28 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
 
         // 4. Light the marked vertices, group by group, in model space.
         let lights = model_lights(&self.lighting, model, &self.view);
+        let ambient = &self.lighting.ambient;
         for g in 0..mesh.groups() {
             let grp = mesh.group(g);
             let m = grp.material;
+            // The group's shading, unless each vertex has its own colour.
+            let shared = Lit::new(m.kd, m.ka, &m, ambient);
             for i in grp.first_vertex..grp.first_vertex + grp.vertices {
                 let slot = &mut cache[i as usize];
                 if slot.v.code & USED == 0 {
                     continue;
                 }
                 stats.lit += 1;
-                let kd = mesh.color(i).unwrap_or(m.kd);
-                let ka = if mesh.color(i).is_some() { kd } else { m.ka };
+                let color = mesh.color(i);
+                let kd = color.unwrap_or(m.kd);
                 slot.v.rgb = match mesh.normal(i).filter(|_| opts.lit) {
-                    Some(n) => shade_vec(
-                        n.map(|c| S::from_q(c as i64, 15)),
-                        kd,
-                        ka,
-                        &m,
-                        &lights,
-                        &self.lighting.ambient,
-                    ),
+                    Some(n) => {
+                        let n = n.map(|c| S::from_q(c as i64, 15));
+                        match color {
+                            Some(c) => Lit::new(c, c, &m, ambient).at(n, &lights),
+                            None => shared.at(n, &lights),
+                        }
+                    }
                     None => [kd.r, kd.g, kd.b],
                 };
             }
@@ -1351,31 +1353,62 @@ fn shade_vec<S: Real>(
     lights: &[ModelLight<S>],
     ambient: &Vec3<S>,
 ) -> [u8; 3] {
-    let (mut diff, mut spec) = ([S::ZERO; 3], [S::ZERO; 3]);
-    let specular = m.ks != Rgb::new(0, 0, 0);
-    for l in lights {
-        let ndl = dot(n, l.dir);
-        if ndl > S::ZERO {
-            for (d, c) in diff.iter_mut().zip(l.color) {
-                *d = *d + c * ndl;
-            }
-            if specular {
-                let ndh = dot(n, l.half);
-                if ndh > S::ZERO {
-                    let p = powi(ndh, m.ns.max(1));
-                    for (s, c) in spec.iter_mut().zip(l.color) {
-                        *s = *s + c * p;
+    Lit::new(kd, ka, m, ambient).at(n, lights)
+}
+
+/// What [`shade_vec`] needs of a material and its colours, in the back
+/// end's numbers: prepared once for a group of vertices that share them
+/// (a mesh without vertex colours), not once a vertex.
+#[derive(Clone, Copy)]
+struct Lit<S> {
+    /// `ka ambient`, per channel.
+    base: Vec3<S>,
+    kd: Vec3<S>,
+    ks: Vec3<S>,
+    specular: bool,
+    ns: u8,
+}
+
+impl<S: Real> Lit<S> {
+    #[inline]
+    fn new(kd: Rgb, ka: Rgb, m: &Material, ambient: &Vec3<S>) -> Self {
+        let ch = |c: Rgb| [c.r, c.g, c.b].map(|v| S::from_i32(v as i32));
+        let ka = ch(ka);
+        Lit {
+            base: core::array::from_fn(|k| ka[k] * ambient[k]),
+            kd: ch(kd),
+            ks: ch(m.ks),
+            specular: m.ks != Rgb::new(0, 0, 0),
+            ns: m.ns.max(1),
+        }
+    }
+
+    /// The colour at unit normal `n` under `lights`.
+    #[inline]
+    fn at(&self, n: Vec3<S>, lights: &[ModelLight<S>]) -> [u8; 3] {
+        let (mut diff, mut spec) = ([S::ZERO; 3], [S::ZERO; 3]);
+        for l in lights {
+            let ndl = dot(n, l.dir);
+            if ndl > S::ZERO {
+                for (d, c) in diff.iter_mut().zip(l.color) {
+                    *d = *d + c * ndl;
+                }
+                if self.specular {
+                    let ndh = dot(n, l.half);
+                    if ndh > S::ZERO {
+                        let p = powi(ndh, self.ns);
+                        for (s, c) in spec.iter_mut().zip(l.color) {
+                            *s = *s + c * p;
+                        }
                     }
                 }
             }
         }
+        core::array::from_fn(|k| {
+            let v = self.base[k] + self.kd[k] * diff[k] + self.ks[k] * spec[k];
+            v.to_fixed(0).unwrap_or(255).clamp(0, 255) as u8
+        })
     }
-    let ch = |c: Rgb| [c.r, c.g, c.b].map(|v| S::from_i32(v as i32));
-    let (kd, ka, ks) = (ch(kd), ch(ka), ch(m.ks));
-    core::array::from_fn(|k| {
-        let v = ka[k] * ambient[k] + kd[k] * diff[k] + ks[k] * spec[k];
-        v.to_fixed(0).unwrap_or(255).clamp(0, 255) as u8
-    })
 }
 
 /// `x^e` by squaring.
