@@ -836,6 +836,16 @@ impl<'a, S: Real, const D: usize> Scene<'a, S, D> {
                 tagged(&d.mesh, &d.opts.state, t)
             }
         };
+        if direct && d.front_bits {
+            // No triangle clipped: the drawn ones are the front bits, in
+            // triangle order, none read or culled again (the culling walk
+            // asks once per tile an object touches).
+            each_front(d, base, |t| {
+                let v = d.mesh.triangle(t).map(|i| &base[i as usize].v);
+                f(Primitive::Mesh(MeshTriangle { v, state: state(t) }));
+            });
+            return;
+        }
         let sign = front_sign(&d.opts);
         // The kept pieces of clipped triangles, in triangle order.
         let mut pieces = match d.pieces {
@@ -1254,6 +1264,21 @@ fn mark_used<const INSIDE: bool>(
     stats.clipped += clipped;
 }
 
+/// Calls `f(t)` for each triangle `t` of draw `d` that its front bits
+/// list ([`Draw::front_bits`], in the spare bits of its cache slots
+/// `base`), in increasing order: its drawn triangles, none read or culled.
+#[inline(always)]
+fn each_front<S>(d: &Draw<'_, S>, base: &[VertexSlot], mut f: impl FnMut(u16)) {
+    let words = (d.mesh.triangles() as usize).div_ceil(16);
+    for (w, slot) in base[..words].iter().enumerate() {
+        let mut m = slot.v.spare;
+        while m != 0 {
+            f((w * 16) as u16 + m.trailing_zeros() as u16);
+            m &= m - 1;
+        }
+    }
+}
+
 /// Twice the signed screen area (y down), sub-pixels squared.
 #[inline]
 fn area(v: &[&VertexSlot; 3]) -> i64 {
@@ -1487,17 +1512,11 @@ impl<S: Real, const D: usize> CommandSource for Scene<'_, S, D> {
             };
             let base = &self.cache[d.first as usize..];
             if d.front_bits {
-                let words = (d.mesh.triangles() as usize).div_ceil(16);
-                for (w, slot) in base[..words].iter().enumerate() {
-                    let mut m = slot.v.spare;
-                    while m != 0 {
-                        let t = (w * 16) as u16 + m.trailing_zeros() as u16;
-                        m &= m - 1;
-                        let v = d.mesh.triangle(t).map(|i| &base[i as usize]);
-                        let b = SubBox::of_points(v.map(|s| (s.v.x, s.v.y)));
-                        f((d.tri_base + t as u32) << 3, b.pixels());
-                    }
-                }
+                each_front(d, base, |t| {
+                    let v = d.mesh.triangle(t).map(|i| &base[i as usize]);
+                    let b = SubBox::of_points(v.map(|s| (s.v.x, s.v.y)));
+                    f((d.tri_base + t as u32) << 3, b.pixels());
+                });
                 continue;
             }
             for t in 0..d.mesh.triangles() {
