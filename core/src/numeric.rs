@@ -250,6 +250,12 @@ fn div_floor_u24_with(n: u64, d: u32, div: impl Fn(u32) -> u32) -> u64 {
 /// 64-bit host has every instruction they ask about.
 pub(crate) const MCU32: bool = cfg!(any(target_arch = "arm", target_arch = "riscv32"));
 
+/// Whether most instructions reach more than eight registers: not on
+/// ARMv6-M (the Cortex-M0), whose 16-bit Thumb encodings address r0-r7,
+/// so that a span loop that holds one more value spills it. A route that
+/// trades a table read for a register held across a loop checks it.
+pub(crate) const MANY_REGS: bool = !cfg!(all(target_arch = "arm", not(target_has_atomic = "32")));
+
 /// Whether this chip divides 32-bit integers in hardware: every Arm
 /// M-profile core with 32-bit atomics (ARMv7-M, ARMv8-M Mainline) has
 /// `udiv`, every RISC-V core with the `M` extension (rv32imc, rv32imac:

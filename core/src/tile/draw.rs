@@ -14,7 +14,7 @@ use crate::command::{Blend, Command, QuadVertex, SpanCmd, State};
 use crate::config::{CommandSet, TileConfig};
 use crate::error::Error;
 use crate::format::{ColorPlane, Lanes, PixelFormat, Rgb};
-use crate::fragment::dither::{Dither, NoDither};
+use crate::fragment::dither::{packed_carry, packed_step, Dither, NoDither};
 use crate::fragment::{BlendMode, DepthMode, DepthPlane, ShadingMode, WidMode, WidPlane};
 use crate::geom::cell_bounds;
 use crate::geom::{MeshVertex, Rect, SubBox};
@@ -1019,6 +1019,7 @@ where
         let blend = MODE & !(QUAD_STEP | IN_RANGE);
         let bias = d.round_bias();
         let scaled = Self::scaled_blend::<MODE, Dd>(d);
+        let mut row = d.packed_row(x, y);
         for idx in range {
             let pass = self.wid.pass(idx, wid)
                 && match blend {
@@ -1039,12 +1040,18 @@ where
                     };
                     mix(c, old, a >> 16, bias, scaled)
                 };
-                if CLAMP {
-                    self.store::<MASKED, _>(d, idx, x, y, v, mask);
+                let carry = if d.packed() {
+                    packed_carry(row)
                 } else {
-                    self.store_in_range::<MASKED, _>(d, idx, x, y, v, mask);
+                    d.carry(x, y)
+                };
+                if CLAMP {
+                    self.store_carry::<MASKED, false>(idx, carry, v, mask);
+                } else {
+                    self.store_carry::<MASKED, true>(idx, carry, v, mask);
                 }
             }
+            row = packed_step(row);
             x = x.wrapping_add(1);
             c = c.zip(dc, |v, d| v.wrapping_add(d));
             if MODE & QUAD_STEP != 0 {

@@ -325,34 +325,41 @@ where
         v: F::Lanes,
         mask: u32,
     ) {
-        self.put_packed::<MASKED>(i, Self::pack_at(d, x, y, v), mask);
+        self.store_carry::<MASKED, false>(i, d.carry(x, y), v, mask);
+    }
+
+    /// [`Self::store`] with the dither's carry at the pixel already known
+    /// (a span loop walks it: [`Dither::cursor`]). With `IN_RANGE` the
+    /// lanes are each in `0..`[`Self::lane_limit`]: the quantization's
+    /// saturation and clamp cannot act, so a lane is a shift (the same
+    /// value, fewer instructions).
+    #[inline(always)]
+    fn store_carry<const MASKED: bool, const IN_RANGE: bool>(
+        &mut self,
+        i: usize,
+        carry: i32,
+        v: F::Lanes,
+        mask: u32,
+    ) {
+        let raw = if IN_RANGE {
+            F::pack(v.map(|v| (v as u32 + carry as u32) as i32 >> COLOR_FRAC))
+        } else {
+            Self::pack_carry(carry, v)
+        };
+        self.put_packed::<MASKED>(i, raw, mask);
     }
 
     /// `v` (as in [`Self::store`]) dithered at screen `(x, y)`, quantized
     /// and packed.
     #[inline(always)]
     fn pack_at<Dd: Dither>(d: Dd, x: u32, y: u32, v: F::Lanes) -> u32 {
-        let carry = d.carry(x, y);
-        F::pack(v.zip(F::MAX, |v, max| quantize_carry(v, max, carry)))
+        Self::pack_carry(d.carry(x, y), v)
     }
 
-    /// [`Self::store`] of lanes each in `0..`[`Self::lane_limit`]: the
-    /// quantization's saturation and clamp cannot act, so a lane is a
-    /// shift ([`Self::pack_at`]'s value, fewer instructions).
+    /// `v` with the dither's `carry` added, quantized and packed.
     #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
-    fn store_in_range<const MASKED: bool, Dd: Dither>(
-        &mut self,
-        d: Dd,
-        i: usize,
-        x: u32,
-        y: u32,
-        v: F::Lanes,
-        mask: u32,
-    ) {
-        let carry = d.carry(x, y);
-        let q = v.map(|v| (v as u32 + carry as u32) as i32 >> COLOR_FRAC);
-        self.put_packed::<MASKED>(i, F::pack(q), mask);
+    fn pack_carry(carry: i32, v: F::Lanes) -> u32 {
+        F::pack(v.zip(F::MAX, |v, max| quantize_carry(v, max, carry)))
     }
 
     /// The bound of lane `i` below which (and from 0) a value quantizes
