@@ -287,15 +287,17 @@ fn parse(out: &str) -> Report {
 
 /// Flash (`.vector_table` + `.text` + `.rodata`) and static RAM (`.data` + `.bss`) of an ELF.
 /// The volume workload on the host: what the board must print.
-fn host_volume() -> [tilerast_fw::volumes::VolumeRun; 3] {
-    use tilerast_fw::volumes::{run, BRICK_BYTES, VOXELS};
+fn host_volume() -> [tilerast_fw::volumes::VolumeRun; 4] {
+    use tilerast_fw::volumes::{run, BRICK_BYTES, CELL_BYTES, VOXELS};
     let mut density = vec![0u8; VOXELS];
     let mut normals = vec![0u8; 3 * VOXELS];
     let mut bricks = vec![0u8; BRICK_BYTES];
+    let mut cells = vec![0u8; CELL_BYTES];
     run(
         density.as_mut_slice().try_into().unwrap(),
         normals.as_mut_slice().try_into().unwrap(),
         bricks.as_mut_slice().try_into().unwrap(),
+        cells.as_mut_slice().try_into().unwrap(),
         &mut || 0,
     )
     .unwrap()
@@ -629,11 +631,12 @@ fn firmware_output_is_bit_identical_to_the_host() {
                 );
                 println!("{board:>10} volume {mode}: CRC 0x{:08x} = host", h.crc);
             }
-            assert_eq!(
-                host[2].crc, host[0].crc,
-                "skipping bricks changed the frame"
-            );
-            assert!(host[2].stats.skipped > host[2].stats.samples / 4);
+            for skipping in &host[2..] {
+                assert_eq!(skipping.crc, host[0].crc, "skipping changed the frame");
+                assert!(skipping.stats.skipped > skipping.stats.samples / 4);
+            }
+            // The cells, finer than the bricks, skip more.
+            assert!(host[3].stats.skipped > host[2].stats.skipped);
             assert!(full_volume, "{board}: the full build has no volume code?");
             assert!(
                 !min_volume,
@@ -1142,7 +1145,9 @@ fn report(reports: &[BoardResult], v6: &Report) -> String {
              view-aligned slices into a {VOL_SCREEN}x{VOL_SCREEN} RGB565 frame (4x4 dither, 32x32 tiles, \
              normal plane 14 KB). Phase I: slice, classify, composite; phase II: shade. \
              `normal_bricks` is normal blending skipping the samples of 4-cell bricks the transfer \
-             function makes transparent (1 KB of brick ranges; the same frame as `normal_blending`). \
+             function makes transparent (1 KB of brick ranges), `normal_cells` the samples of the \
+             cells it makes transparent (4 KB, a bit a cell, made for the transfer function); both \
+             the same frame as `normal_blending`. \
              Every mode's frames equal the host's (CRC). `reports/volume.md` has the host's size \
              series.\n\n\
              | mode | samples | skipped | blended | phase I instr | per sample | phase II instr | per pixel | total instr |\n\

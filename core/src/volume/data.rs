@@ -5,6 +5,8 @@
 use crate::error::Error;
 use crate::geometry::isqrt;
 
+use super::Transfer;
+
 /// Largest volume side, in voxels: coordinates are 16.16 fixed point and
 /// `1024 << 16` leaves room below `i32::MAX` for a step.
 pub const MAX_VOLUME_SIDE: u16 = 1024;
@@ -43,9 +45,16 @@ pub enum Normals<'a> {
 pub struct Volume<'a> {
     density: &'a [u8],
     dims: [u16; 3],
+    /// The largest index of a cell's lowest corner whose 8 corners lie in
+    /// the volume by index arithmetic: `len - (w h + w + 2)` (never
+    /// negative: every side is at least 2).
+    last_cell: usize,
     spacing: [u16; 3],
     normals: Normals<'a>,
     bricks: Option<Bricks<'a>>,
+    /// One bit a cell, set where the cell may hold a visible sample
+    /// ([`Volume::compute_visible_cells`]).
+    visible: Option<&'a [u8]>,
 }
 
 /// Per-brick density ranges for empty-space skipping (seed 002 taken
@@ -81,6 +90,19 @@ pub const fn brick_bytes(dims: [u16; 3], shift: u32) -> usize {
     2 * bricks_along(dims[0], shift) * bricks_along(dims[1], shift) * bricks_along(dims[2], shift)
 }
 
+/// Bytes [`Volume::compute_visible_cells`] writes for a volume of `dims`:
+/// one bit a voxel (the cell it is the lowest corner of), `x` fastest,
+/// bit `i & 7` of byte `i >> 3`.
+///
+/// ```
+/// use tilerast::volume::visible_cell_bytes;
+/// assert_eq!(visible_cell_bytes([32, 32, 32]), 4096);
+/// assert_eq!(visible_cell_bytes([3, 3, 3]), 4);
+/// ```
+pub const fn visible_cell_bytes(dims: [u16; 3]) -> usize {
+    (dims[0] as usize * dims[1] as usize * dims[2] as usize).div_ceil(8)
+}
+
 /// Bricks of `2^shift` cells along an axis of `d` voxels.
 const fn bricks_along(d: u16, shift: u32) -> usize {
     (d as usize + (1 << shift) - 1) >> shift
@@ -96,12 +118,15 @@ impl<'a> Volume<'a> {
         if !ok {
             return Err(Error::BadSize);
         }
+        let (w, wh) = (dims[0] as usize, dims[0] as usize * dims[1] as usize);
         Ok(Volume {
             density,
             dims,
+            last_cell: density.len() - (wh + w + 2),
             spacing: [256; 3],
             normals: Normals::OnTheFly,
             bricks: None,
+            visible: None,
         })
     }
 
@@ -195,6 +220,93 @@ impl<'a> Volume<'a> {
             stride: [n[0], n[0] * n[1]],
         });
         Ok(self)
+    }
+
+    /// Classifies every cell through `tf` once (seed 002's classification
+    /// folded into a bitmap): bit `x + w (y + h z)` of `out` is set when
+    /// the range of the 8 corner densities of the cell a sample at voxel
+    /// `(x, y, z)` reads (from `(x, y, z)` to `(x + 1, y + 1, z + 1)`, each
+    /// coordinate first cut to `dims - 2`: on the top faces the cell below)
+    /// holds a density of non-zero opacity. Trilinear interpolation stays
+    /// inside its corners' range, so a sample in a clear cell is
+    /// transparent and [`Volume::with_visible_cells`] skips it before the
+    /// fetch: the same image, one bit a voxel (4 KB for 32^3), found from
+    /// the integer part of a sample's coordinates alone. Unlike
+    /// [`Volume::compute_bricks`]'s ranges the bits depend on the transfer
+    /// function: make them again when it changes. [`Error::BufferTooSmall`]
+    /// when `out` is shorter than [`visible_cell_bytes`].
+    ///
+    /// ```
+    /// use tilerast::prelude::Rgb;
+    /// use tilerast::volume::{sphere, visible_cell_bytes, TfPoint, Transfer, Volume};
+    /// let mut d = vec![0u8; 16 * 16 * 16];
+    /// sphere(16, &mut d)?;
+    /// let w = Rgb::new(255, 255, 255);
+    /// let tf = Transfer::from_points(&[TfPoint::new(100, 0, w), TfPoint::new(200, 255, w)])?;
+    /// let mut bits = vec![0u8; visible_cell_bytes([16; 3])];
+    /// let vol = Volume::new(&d, [16; 3])?;
+    /// vol.compute_visible_cells(&tf, &mut bits)?;
+    /// assert_eq!(bits[0] & 1, 0); // a corner of the cube is clear
+    /// let vol = vol.with_visible_cells(&bits)?;
+    /// # let _ = vol;
+    /// # Ok::<(), tilerast::Error>(())
+    /// ```
+    pub fn compute_visible_cells(&self, tf: &Transfer, out: &mut [u8]) -> Result<(), Error> {
+        let out = out
+            .get_mut(..visible_cell_bytes(self.dims))
+            .ok_or(Error::BufferTooSmall)?;
+        out.fill(0);
+        let [w, h, d] = self.dims.map(|v| v as usize);
+        // Each row of cells: the corners' range along x from two voxel
+        // rows of each of two layers, folded pairwise.
+        for z in 0..d {
+            for y in 0..h {
+                let (cy, cz) = (y.min(h - 2), z.min(d - 2));
+                let rows = [
+                    self.index(0, cy, cz),
+                    self.index(0, cy + 1, cz),
+                    self.index(0, cy, cz + 1),
+                    self.index(0, cy + 1, cz + 1),
+                ];
+                let range = |x: usize| {
+                    rows.iter().fold((u8::MAX, u8::MIN), |(lo, hi), &r| {
+                        let v = self.density[r + x];
+                        (lo.min(v), hi.max(v))
+                    })
+                };
+                let mut prev = range(0);
+                let mut visible = false;
+                for x in 0..w {
+                    // The last voxel repeats the last cell's bit.
+                    if x + 1 < w {
+                        let next = range(x + 1);
+                        let (lo, hi) = (prev.0.min(next.0), prev.1.max(next.1));
+                        visible = !tf.transparent(lo, hi);
+                        prev = next;
+                    }
+                    if visible {
+                        let i = self.index(x, y, z);
+                        out[i >> 3] |= 1 << (i & 7);
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Skips samples in cells [`Volume::compute_visible_cells`] found
+    /// clear, reading its bits. [`Error::BadSize`] for another length.
+    pub fn with_visible_cells(mut self, bits: &'a [u8]) -> Result<Self, Error> {
+        if bits.len() != visible_cell_bytes(self.dims) {
+            return Err(Error::BadSize);
+        }
+        self.visible = Some(bits);
+        Ok(self)
+    }
+
+    /// Whether the volume skips clear cells by a bitmap.
+    pub fn has_visible_cells(&self) -> bool {
+        self.visible.is_some()
     }
 
     /// The side of the bricks skipped, as a shift (cells `2^shift`), if
@@ -304,65 +416,112 @@ impl<'a> Volume<'a> {
     }
 
     /// The cell around 16.16 voxel coordinate `t` (each inside
-    /// `[0, (dims - 1) << 16]`): its lowest corner and the trilinear
-    /// weights of its 8 corners. On a top face (`t = (dims - 1) << 16`,
+    /// `[0, (dims - 1) << 16]`): its lowest corner and the 8-bit fractions
+    /// of its trilinear weights. On a top face (`t = (dims - 1) << 16`,
     /// fraction 0) the cell is the one below with fraction `256`: the same
     /// value (the weight-0 corner drops out exactly), and every corner is
     /// `+1`, `+w`, `+w h` away, so a corner pair along `x` is two
-    /// adjacent bytes read by one bounds check.
+    /// adjacent bytes read by one bounds check. Outside the range the
+    /// corner is still clamped into the volume (the fractions are then
+    /// meaningless, never the reads).
     #[inline(always)]
-    fn cell(&self, t: [i32; 3]) -> Probe {
-        // i = min(t >> 16, dims - 2), f = (t - i 2^16) >> 8: branch-free.
+    pub(crate) fn cell(&self, t: [i32; 3]) -> Probe {
+        // i = min(t >> 16, dims - 2), f = (t - i 2^16) >> 8 = (t >> 8) -
+        // i 2^8: branch-free. (The second form is not linear in `t`, so
+        // the walk keeps one running coordinate an axis, not several.)
         let axis = |a: usize| {
             let i = ((t[a] >> 16) as u32).min(self.dims[a] as u32 - 2);
-            (i as usize, (t[a] as u32 - (i << 16)) >> 8)
+            (i, ((t[a] >> 8) as u32).wrapping_sub(i << 8) & 0x1ff)
         };
         let ((x, fx), (y, fy), (z, fz)) = (axis(0), axis(1), axis(2));
-        let (w, wh) = (
-            self.dims[0] as usize,
-            self.dims[0] as usize * self.dims[1] as usize,
-        );
-        let base = x + w * y + wh * z;
         Probe {
-            rows: [base, base + w, base + wh, base + wh + w],
-            at: [x, y, z],
-            f: [fx, fy, fz],
+            base: self.index(x as usize, y as usize, z as usize) as u32,
+            f: fx | fy << 9 | fz << 18,
         }
+    }
+
+    /// Whether the cell a sample at 16.16 voxel coordinate `t` (each
+    /// inside `[0, (dims - 1) << 16]`) reads may hold a visible sample:
+    /// its bit of [`Volume::with_visible_cells`] (`true` without them),
+    /// indexed by the integer parts alone (the top faces' bits repeat the
+    /// cells below).
+    #[inline(always)]
+    pub(crate) fn visible(&self, t: [i32; 3]) -> bool {
+        let Some(bits) = self.visible else {
+            return true;
+        };
+        let i = self.index(
+            (t[0] >> 16) as usize,
+            (t[1] >> 16) as usize,
+            (t[2] >> 16) as usize,
+        );
+        bits.get(i >> 3).is_none_or(|b| b >> (i & 7) & 1 != 0)
     }
 
     /// The density at 16.16 voxel coordinate `t` (each inside
     /// `[0, (dims - 1) << 16]`), trilinear with 8-bit weights, rounded;
     /// and the cell, for [`Self::normal_at`].
-    #[inline(always)]
+    #[cfg(test)]
     pub(crate) fn sample(&self, t: [i32; 3]) -> (u8, Probe) {
         let p = self.cell(t);
+        (self.density_at(p), p)
+    }
+
+    /// The density in cell `p` at its fractions, trilinear with 8-bit
+    /// weights, rounded.
+    #[allow(unsafe_code)]
+    #[inline(always)]
+    pub(crate) fn density_at(&self, p: Probe) -> u8 {
         let w = p.weights();
+        let Some(rows) = self.rows(p) else {
+            return 0;
+        };
         // Up to 255 x 2^24: exact in `u32`.
         let mut s = 0u32;
-        for (r, &row) in p.rows.iter().enumerate() {
-            let v = chunk::<2>(self.density, row);
+        for (r, &row) in rows.iter().enumerate() {
+            // SAFETY: `rows` checked `row + 2 <= len`.
+            let v = unsafe { chunk::<2>(self.density, row) };
             s = s
                 .wrapping_add(w[2 * r] * v[0] as u32)
                 .wrapping_add(w[2 * r + 1] * v[1] as u32);
         }
-        let d = (s.wrapping_add(1 << 23) >> 24) as u8;
-        (d, p)
+        (s.wrapping_add(1 << 23) >> 24) as u8
     }
 
-    /// The normal at the cell [`Self::sample`] found, Q1.14
-    /// ([`NORMAL_ONE`]): trilinear in the quantised normals, or the
-    /// trilinear gradient normalised once (on the fly).
+    /// The first voxel of each of cell `p`'s four rows of two (`y`, `z` =
+    /// 0/1 in that order), `None` unless every row's pair lies inside the
+    /// volume (one test for the eight reads: always inside for a cell
+    /// [`Self::cell`] found). Row `r`'s pair is then bytes `r..r + 2` of
+    /// the densities and bytes `3 r..3 r + 6` of quantised normals.
+    #[inline(always)]
+    fn rows(&self, p: Probe) -> Option<[usize; 4]> {
+        let (w, wh) = (
+            self.dims[0] as usize,
+            self.dims[0] as usize * self.dims[1] as usize,
+        );
+        let base = p.base as usize;
+        // base <= len - (wh + w + 2): the last row ends by `len`.
+        (base <= self.last_cell).then_some([base, base + w, base + wh, base + wh + w])
+    }
+
+    /// The normal in cell `p` ([`Self::cell`]), Q1.14 ([`NORMAL_ONE`]):
+    /// trilinear in the quantised normals, or the trilinear gradient
+    /// normalised once (on the fly).
+    #[allow(unsafe_code)]
     #[inline(always)]
     pub(crate) fn normal_at(&self, p: &Probe) -> [i32; 3] {
         match self.normals {
             Normals::Quantized(n) => {
                 // Q0.7 (scale 127) times 2^24, below 2^31 in magnitude.
-                // (The weights again: cheaper than keeping them live
-                // across the transfer lookup, for the few samples blended.)
                 let w = p.weights();
                 let mut s = [0i32; 3];
-                for (r, &row) in p.rows.iter().enumerate() {
-                    let v = chunk::<6>(n, 3 * row);
+                let Some(rows) = self.rows(*p) else {
+                    return [0; 3];
+                };
+                for (r, &row) in rows.iter().enumerate() {
+                    // SAFETY: `rows` checked `row + 2 <= len`, and the
+                    // normals are `3 len` long (`with_normals`).
+                    let v = unsafe { chunk::<6>(n, 3 * row) };
                     let (w0, w1) = (w[2 * r] as i32, w[2 * r + 1] as i32);
                     for (a, s) in s.iter_mut().enumerate() {
                         *s += w0 * (v[a] as i8 as i32) + w1 * (v[3 + a] as i8 as i32);
@@ -372,15 +531,16 @@ impl<'a> Volume<'a> {
                 s.map(|s| (((s + 512) >> 10) * 129 + (1 << 13)) >> 14)
             }
             Normals::OnTheFly => {
-                let [x, y, z] = p.at;
+                let (w, h) = (self.dims[0] as usize, self.dims[1] as usize);
+                let b = p.base as usize;
+                let [x, y, z] = [b % w, b / w % h, b / (w * h)];
                 let g: [[i32; 3]; 8] = core::array::from_fn(|k| {
                     self.gradient(x + (k & 1), y + (k >> 1 & 1), z + (k >> 2))
                 });
                 // 2^24 times the gradient, kept to 12 fraction bits so the
                 // squares fit.
-                let gi: [i64; 3] = core::array::from_fn(|a| {
-                    trilinear64(g.map(|g| g[a]), p.f.map(|f| f as i32)) >> 12
-                });
+                let f = p.fractions().map(|f| f as i32);
+                let gi: [i64; 3] = core::array::from_fn(|a| trilinear64(g.map(|g| g[a]), f) >> 12);
                 let len = isqrt((gi[0] * gi[0] + gi[1] * gi[1] + gi[2] * gi[2]) as u64) as i64;
                 if len == 0 {
                     return [0; 3];
@@ -391,32 +551,51 @@ impl<'a> Volume<'a> {
     }
 }
 
-/// The `N` bytes of `s` from `i`: two checks (`i <= len`, `len - i >= N`)
-/// where a range costs more. Every sample's cell lies in its volume
-/// (`Slice::row` solves the spans so); out of it, zeros.
+/// The `N` bytes of `s` from `i`, for `i + N <= s.len()`, unchecked: the
+/// sampler's 4 density and 4 normal reads a sample are bounded by one test
+/// ([`Volume::rows`]) instead of two each (M4 volume phase I: *measured
+/// below*). `chunk_checked` is its safe twin, compared in the tests.
+///
+/// # Safety
+/// `i + N <= s.len()`.
+#[allow(unsafe_code)]
 #[inline(always)]
-fn chunk<const N: usize>(s: &[u8], i: usize) -> [u8; N] {
+unsafe fn chunk<const N: usize>(s: &[u8], i: usize) -> [u8; N] {
+    debug_assert!(i + N <= s.len());
+    // SAFETY: `[u8; N]` has alignment 1 and the caller keeps the `N`
+    // bytes from `i` inside `s`.
+    unsafe { s.as_ptr().add(i).cast::<[u8; N]>().read() }
+}
+
+/// [`chunk`]'s safe twin: the same bytes, zeros out of range.
+#[cfg(test)]
+fn chunk_checked<const N: usize>(s: &[u8], i: usize) -> [u8; N] {
     *s.get(i..)
         .and_then(|s| s.first_chunk::<N>())
         .unwrap_or(&[0; N])
 }
 
-/// A sample's cell ([`Volume::sample`]): the first voxel of each of its
-/// four rows of two (`y`, `z` = 0/1 in that order), its lowest corner and
-/// the 8-bit fractions (`256` on a top face).
-#[derive(Debug, Clone, Copy)]
+/// A sample's cell ([`Volume::cell`]): its lowest corner's voxel index
+/// and the three 8-bit fractions, 9 bits each (`256` on a top face),
+/// packed in a word so phase I's first pass can list it cheaply.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub(crate) struct Probe {
-    rows: [usize; 4],
-    at: [usize; 3],
-    f: [u32; 3],
+    base: u32,
+    f: u32,
 }
 
 impl Probe {
+    /// The fractions along `x`, `y`, `z`.
+    #[inline(always)]
+    fn fractions(&self) -> [u32; 3] {
+        [self.f & 0x1ff, self.f >> 9 & 0x1ff, self.f >> 18]
+    }
+
     /// The 8 corners' trilinear weights, corner `k = x + 2 y + 4 z`: each a
     /// product of three 8-bit factors (at most 2^24), summing to 2^24.
     #[inline(always)]
     fn weights(&self) -> [u32; 8] {
-        let [fx, fy, fz] = self.f;
+        let [fx, fy, fz] = self.fractions();
         let yz = [
             (256 - fy) * (256 - fz),
             fy * (256 - fz),
@@ -623,5 +802,87 @@ mod tests {
                 assert_eq!(plain.normal_at(&probe), wf, "{dims:?} {t:?}");
             }
         }
+    }
+
+    /// The unchecked reads equal their safe twin at every in-range index
+    /// of a row; a cell past the last one reads nothing (`rows` refuses
+    /// it), and a top-face probe from `cell` is always accepted.
+    #[test]
+    #[allow(unsafe_code)]
+    fn unchecked_reads_equal_the_checked_ones() {
+        let mut next = crate::numeric::xorshift(5);
+        let bytes: std::vec::Vec<u8> = (0..97).map(|_| next() as u8).collect();
+        for i in 0..=bytes.len() - 6 {
+            // SAFETY: `i + 6 <= len` (and `i + 2`).
+            unsafe {
+                assert_eq!(chunk::<6>(&bytes, i), chunk_checked::<6>(&bytes, i));
+                assert_eq!(chunk::<2>(&bytes, i), chunk_checked::<2>(&bytes, i));
+            }
+        }
+        assert_eq!(chunk_checked::<2>(&bytes, 96), [0, 0]);
+        for dims in [[2u16, 2, 2], [3, 5, 4], [9, 7, 11]] {
+            let len = dims.iter().map(|&d| d as usize).product::<usize>();
+            let d = std::vec![7u8; len];
+            let vol = Volume::new(&d, dims).unwrap();
+            let top = dims.map(|d| (d as i32 - 1) << 16);
+            let p = vol.cell(top);
+            let rows = vol.rows(p).expect("the top corner's cell");
+            assert!(rows[3] + 2 <= len);
+            assert_eq!(vol.density_at(p), 7);
+            let past = Probe {
+                base: vol.last_cell as u32 + 1,
+                f: 0,
+            };
+            assert!(vol.rows(past).is_none());
+            assert_eq!(vol.density_at(past), 0);
+        }
+    }
+
+    /// A sample whose cell bit is clear is transparent: at random points
+    /// and on every face of random blob volumes, `visible(t)` is false only
+    /// where the sampled density has zero weight; and the bits clear
+    /// something.
+    #[test]
+    fn clear_cells_hold_only_transparent_samples() {
+        use crate::format::Rgb;
+        let mut next = crate::numeric::xorshift(23);
+        let tf = Transfer::from_points(&[
+            super::super::TfPoint::new(120, 0, Rgb::new(255, 255, 255)),
+            super::super::TfPoint::new(200, 255, Rgb::new(255, 255, 255)),
+        ])
+        .unwrap();
+        let mut clear = 0;
+        for dims in [[2u16, 2, 2], [3, 5, 4], [9, 7, 11], [16, 2, 3]] {
+            let len = dims.iter().map(|&d| d as usize).product::<usize>();
+            let dens: std::vec::Vec<u8> = (0..len)
+                .map(|i| {
+                    if (i / 5) % 3 == 0 {
+                        next() as u8
+                    } else {
+                        next() as u8 / 3
+                    }
+                })
+                .collect();
+            let plain = Volume::new(&dens, dims).unwrap();
+            let mut bits = std::vec![0u8; visible_cell_bytes(dims)];
+            plain.compute_visible_cells(&tf, &mut bits).unwrap();
+            let vol = plain.with_visible_cells(&bits).unwrap();
+            for k in 0..4000 {
+                let t: [i32; 3] = core::array::from_fn(|a| {
+                    let top = ((dims[a] as i64 - 1) << 16) as u64;
+                    match (k + a) % 5 {
+                        0 => 0,
+                        1 => top as i32,
+                        _ => (next() % (top + 1)) as i32,
+                    }
+                });
+                if !vol.visible(t) {
+                    clear += 1;
+                    let (d, _) = vol.sample(t);
+                    assert_eq!(tf.weight(d), 0, "{dims:?} {t:?}");
+                }
+            }
+        }
+        assert!(clear > 1000, "{clear}");
     }
 }

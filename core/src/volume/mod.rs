@@ -82,7 +82,10 @@ mod data;
 mod slice;
 mod transfer;
 
-pub use data::{brick_bytes, sphere, Normals, Volume, BRICK_SHIFTS, MAX_VOLUME_SIDE, NORMAL_ONE};
+pub use data::{
+    brick_bytes, sphere, visible_cell_bytes, Normals, Volume, BRICK_SHIFTS, MAX_VOLUME_SIDE,
+    NORMAL_ONE,
+};
 pub use slice::Slice;
 pub use transfer::{TfPoint, Transfer};
 
@@ -228,8 +231,9 @@ pub struct VolumeStats {
     pub samples: u32,
     /// Samples with non-zero opacity, blended.
     pub composited: u32,
-    /// Samples in bricks the transfer function makes transparent, skipped
-    /// without a fetch ([`Volume::with_bricks`]); part of `samples`.
+    /// Samples in bricks or cells the transfer function makes transparent,
+    /// skipped without a fetch ([`Volume::with_bricks`],
+    /// [`Volume::with_visible_cells`]); part of `samples`.
     pub skipped: u32,
 }
 
@@ -289,6 +293,17 @@ impl Cell for ShadedCell {
         self.a as i32
     }
 }
+
+/// Pixels phase I walks in one run ([`VolumePlane::composite`]).
+const RUN: usize = 32;
+
+/// Phase I's empty-space test, chosen by type: none, the bricks' ranges,
+/// the cells' bits.
+const SKIP_NONE: u8 = 0;
+/// See [`SKIP_NONE`].
+const SKIP_BRICKS: u8 = 1;
+/// See [`SKIP_NONE`].
+const SKIP_CELLS: u8 = 2;
 
 /// `f + (s - f) a` with `a` in Q1.15, rounded: back-to-front "over" of a
 /// sample `s` onto a premultiplied accumulator `f`.
@@ -442,24 +457,27 @@ impl<const N: usize, K: Cell> VolumePlane<N, K> {
             return stats;
         }
         cells[..n].fill(K::EMPTY);
-        // Chosen once: a volume without bricks runs a loop without the
-        // test.
-        if view.volume.brick_shift().is_some() {
-            Self::slices::<TN, C, M, S, true>(&mut cells[..n], area, tile, view, comp, &mut stats);
+        // Chosen once: a volume without bricks or cell bits runs a loop
+        // without the test; the cell bits, finer, win over the bricks.
+        let cells = &mut cells[..n];
+        if view.volume.has_visible_cells() {
+            Self::slices::<TN, C, M, S, SKIP_CELLS>(cells, area, tile, view, comp, &mut stats);
+        } else if view.volume.brick_shift().is_some() {
+            Self::slices::<TN, C, M, S, SKIP_BRICKS>(cells, area, tile, view, comp, &mut stats);
         } else {
-            Self::slices::<TN, C, M, S, false>(&mut cells[..n], area, tile, view, comp, &mut stats);
+            Self::slices::<TN, C, M, S, SKIP_NONE>(cells, area, tile, view, comp, &mut stats);
         }
         stats
     }
 
     /// Phase I over the slices into `cells` (the tile's area), testing
-    /// each sample's brick when `BRICKS`.
+    /// each sample's brick (`SKIP_BRICKS`) or cell bit (`SKIP_CELLS`).
     fn slices<
         const TN: usize,
         C: TileConfig,
         M: Compositor<Cell = K>,
         const S: usize,
-        const BRICKS: bool,
+        const SKIP: u8,
     >(
         cells: &mut [K],
         area: Rect,
@@ -471,44 +489,118 @@ impl<const N: usize, K: Cell> VolumePlane<N, K> {
         let (vol, tf) = (&view.volume, view.transfer);
         // Counted in locals (registers), added once.
         let (mut samples, mut skipped, mut composited) = (0, 0, 0);
+        // A row is walked in runs of up to `RUN` pixels, in two passes:
+        // the first tests depth (and bricks or cells) with few values live
+        // and lists the cells of the samples to fetch; the second fetches,
+        // classifies and blends only those. One pass carrying both kept
+        // the fetch's values spilled on every pixel. Each sample lands in
+        // its own cell of the plane, so the order of blends is unchanged.
+        let mut keep = [0u8; RUN];
         for s in view.slices.iter() {
             let Some(r) = s.bounds.intersect(&area) else {
                 continue;
             };
             stats.slices += 1;
-            let z = s.z;
+            let (z, tx) = (s.z, s.tx);
             for py in r.y..r.y + r.h as i32 {
                 let (x0, x1, mut t) = s.row(py, r.x, r.x + r.w as i32, view.tops);
                 let row = (py - area.y) * area.w as i32 - area.x;
-                for px in x0..x1 {
-                    let idx = (row + px) as usize;
-                    if z < tile.depth.read(idx) {
-                        samples += 1;
-                        let empty = BRICKS
-                            && vol
-                                .brick_range(t)
-                                .is_some_and(|(lo, hi)| tf.transparent(lo, hi));
-                        if empty {
-                            skipped += 1;
-                        } else {
-                            let (d, probe) = vol.sample(t);
-                            let a = tf.weight(d) as i32;
-                            if a != 0 {
-                                composited += 1;
-                                let nrm = vol.normal_at(&probe);
-                                comp.blend(&mut cells[idx], nrm, a, tf.color(d));
-                            }
-                        }
+                let mut cx = x0;
+                while cx < x1 {
+                    let n = (x1 - cx).min(RUN as i32) as usize;
+                    let first = (row + cx) as usize;
+                    let (m, passed, empty) =
+                        Self::walk_run::<TN, C, SKIP>(tile, first, n, z, t, tx, vol, tf, &mut keep);
+                    samples += passed;
+                    skipped += empty;
+                    if let Some(cells) = cells.get_mut(first..) {
+                        let keep = keep.get(..m).unwrap_or_default();
+                        composited += Self::fetch_run(cells, vol, tf, comp, t, tx, keep);
                     }
-                    for (t, d) in t.iter_mut().zip(s.tx) {
-                        *t += d;
+                    for (t, d) in t.iter_mut().zip(tx) {
+                        *t += d * n as i32;
                     }
+                    cx += n as i32;
                 }
             }
         }
         stats.samples += samples;
         stats.skipped += skipped;
         stats.composited += composited;
+    }
+
+    /// Phase I's first pass over a run of `n <= RUN` pixels from tile
+    /// index `first`, the first at voxel coordinate `t`: lists in `keep`
+    /// the samples nearer than the depth plane and not in clear bricks or
+    /// cells. Returns how many it listed, how many
+    /// passed the depth test, how many of those it skipped. Not inlined:
+    /// the walk's state stays out of its registers.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(never)]
+    fn walk_run<const TN: usize, C: TileConfig, const SKIP: u8>(
+        tile: &Tile<TN, C>,
+        first: usize,
+        n: usize,
+        z: u16,
+        mut t: [i32; 3],
+        tx: [i32; 3],
+        vol: &Volume<'_>,
+        tf: &Transfer,
+        keep: &mut [u8; RUN],
+    ) -> (usize, u32, u32) {
+        let (mut m, mut passed, mut skipped) = (0, 0, 0);
+        for k in 0..n.min(RUN) {
+            if z < tile.depth.read(first + k) {
+                passed += 1;
+                let empty = match SKIP {
+                    SKIP_BRICKS => vol
+                        .brick_range(t)
+                        .is_some_and(|(lo, hi)| tf.transparent(lo, hi)),
+                    SKIP_CELLS => !vol.visible(t),
+                    _ => false,
+                };
+                if empty {
+                    skipped += 1;
+                } else if let Some(slot) = keep.get_mut(m) {
+                    *slot = k as u8;
+                    m += 1;
+                }
+            }
+            for (t, d) in t.iter_mut().zip(tx) {
+                *t += d;
+            }
+        }
+        (m, passed, skipped)
+    }
+
+    /// Phase I's second pass over a run: samples `t + k tx` for each
+    /// listed `k`, classifies it and blends the visible ones into
+    /// `cells[k]`; returns how many it blended. Not inlined: its own
+    /// registers, not the walk's.
+    #[inline(never)]
+    fn fetch_run<M: Compositor<Cell = K>>(
+        cells: &mut [K],
+        vol: &Volume<'_>,
+        tf: &Transfer,
+        comp: &M,
+        t: [i32; 3],
+        tx: [i32; 3],
+        keep: &[u8],
+    ) -> u32 {
+        let mut composited = 0;
+        for &k in keep {
+            let p = vol.cell(core::array::from_fn(|a| t[a] + tx[a] * k as i32));
+            let d = vol.density_at(p);
+            let a = tf.weight(d) as i32;
+            if a != 0 {
+                composited += 1;
+                let nrm = vol.normal_at(&p);
+                if let Some(cell) = cells.get_mut(k as usize) {
+                    comp.blend(cell, nrm, a, tf.color(d));
+                }
+            }
+        }
+        composited
     }
 
     /// Shades the plane into `tile` (stage 5): every pixel with opacity
@@ -556,8 +648,9 @@ mod tests {
     use crate::prelude::*;
     use std::vec;
 
-    /// Skipping bricks the transfer function makes transparent changes no
-    /// cell: the same plane with and without bricks, for every brick side,
+    /// Skipping bricks or cells the transfer function makes transparent
+    /// changes no cell: the same plane with and without bricks, for every
+    /// brick side, and with the cells' bits,
     /// on the sphere and on noise (whose ranges are wide), from several
     /// angles; and it skips something where there is empty space.
     #[test]
@@ -606,6 +699,7 @@ mod tests {
                 };
                 let (want, base) = cells(plain);
                 assert!(base.composited > 0 && base.skipped == 0);
+                let mut most = 0;
                 for shift in BRICK_SHIFTS {
                     let mut bricks = vec![0u8; brick_bytes([SIDE; 3], shift)];
                     plain.compute_bricks(shift, &mut bricks).unwrap();
@@ -615,7 +709,22 @@ mod tests {
                     assert_eq!(stats.samples, base.samples);
                     assert_eq!(stats.composited, base.composited);
                     skipped += stats.skipped;
+                    most = most.max(stats.skipped);
                 }
+                // The cells' bits: the same plane, at least as much
+                // skipped as the finest bricks (and over them, too).
+                let mut bits = vec![0u8; visible_cell_bytes([SIDE; 3])];
+                plain.compute_visible_cells(&tf, &mut bits).unwrap();
+                let vol = plain.with_visible_cells(&bits).unwrap();
+                let (got, stats) = cells(vol);
+                assert!(got == want, "cells, {deg} degrees");
+                assert_eq!(stats.samples, base.samples);
+                assert_eq!(stats.composited, base.composited);
+                assert!(stats.skipped >= most, "{} < {most}", stats.skipped);
+                let mut bricks = vec![0u8; brick_bytes([SIDE; 3], 1)];
+                plain.compute_bricks(1, &mut bricks).unwrap();
+                let both = vol.with_bricks(&bricks, 1).unwrap();
+                assert!(cells(both) == (got, stats), "cells and bricks");
             }
         }
         assert!(skipped > 1000, "{skipped}");

@@ -34,25 +34,42 @@ pub struct Slice {
     pub(crate) tx: [i32; 3],
     /// Their steps per row.
     pub(crate) ty: [i32; 3],
+    /// Whether [`Slice::row`] may solve in `i32`.
+    narrow: bool,
 }
 
 impl Slice {
     /// The covered pixels of row `py` inside `[lo, hi)` and the voxel
     /// coordinate at the first: `(x0, x1, t)`, `x0 >= x1` when none.
-    /// Solved exactly from the six half-planes `0 <= t_i <= hi_i`.
+    /// Solved exactly from the six half-planes `0 <= t_i <= hi_i`, in
+    /// `i32` when the slice's numbers are small enough for every step to
+    /// fit ([`Slice::narrow`]; a 32-bit division, one instruction with a
+    /// divider), else in `i64`: the same span either way.
     #[inline]
     pub(crate) fn row(&self, py: i32, lo: i32, hi: i32, top: [i32; 3]) -> (i32, i32, [i32; 3]) {
-        let dy = (py - self.bounds.y) as i64;
-        let (mut x0, mut x1) = (lo as i64, hi as i64);
-        let ax = self.bounds.x as i64;
-        let mut base = [0i64; 3];
+        if self.narrow {
+            self.solve::<i32>(py, lo, hi, top)
+        } else {
+            self.solve::<i64>(py, lo, hi, top)
+        }
+    }
+
+    /// [`Slice::row`] in `T`.
+    #[inline(always)]
+    fn solve<T: RowInt>(&self, py: i32, lo: i32, hi: i32, top: [i32; 3]) -> (i32, i32, [i32; 3]) {
+        let ax = self.bounds.x;
+        let dy = T::from(py - self.bounds.y);
+        // Columns relative to the anchor: k = px - ax.
+        let (mut k0, mut k1) = (T::from(lo - ax), T::from(hi - ax));
+        let zero = T::from(0);
+        let mut base = [zero; 3];
         for i in 0..3 {
-            // t_i(px) = b + tx (px - ax).
-            let b = self.t0[i] as i64 + self.ty[i] as i64 * dy;
+            // t_i(k) = b + tx k.
+            let b = T::from(self.t0[i]) + T::from(self.ty[i]) * dy;
             base[i] = b;
-            let (tx, top) = (self.tx[i] as i64, top[i] as i64);
-            if tx == 0 {
-                if b < 0 || b > top {
+            let (tx, top) = (T::from(self.tx[i]), T::from(top[i]));
+            if tx == zero {
+                if b < zero || b > top {
                     return (0, 0, [0; 3]);
                 }
                 continue;
@@ -60,36 +77,85 @@ impl Slice {
             // With d = |tx|: 0 <= b + tx k <= top holds from
             // k = -floor(b / d) (tx > 0) or -floor((top - b) / d) (tx < 0)
             // up to floor((top - b) / d), respectively floor(b / d).
-            let d = tx.abs();
-            let (under, over) = (div_floor(b, d), div_floor(top - b, d));
-            let (from, to) = if tx > 0 {
-                (-under, over)
+            let d = if tx > zero { tx } else { zero - tx };
+            let (under, over) = (b.div_floor(d), (top - b).div_floor(d));
+            let (from, to) = if tx > zero {
+                (zero - under, over)
             } else {
-                (-over, under)
+                (zero - over, under)
             };
-            x0 = x0.max(ax + from);
-            x1 = x1.min(ax + to + 1);
+            k0 = k0.max(from);
+            k1 = k1.min(to + T::from(1));
         }
-        if x0 >= x1 {
+        if k0 >= k1 {
             return (0, 0, [0; 3]);
         }
-        let k = x0 - ax;
-        let t = core::array::from_fn(|i| (base[i] + self.tx[i] as i64 * k) as i32);
-        (x0 as i32, x1 as i32, t)
+        // The first sample lies in the volume: exact even where the
+        // product wraps.
+        let t = core::array::from_fn(|i| base[i].low_plus(self.tx[i], k0));
+        (ax + k0.low(), ax + k1.low(), t)
     }
 }
 
-/// `floor(n / d)` for `d > 0`: by a 32-bit division when both fit `i32`
-/// (every row of a volume up to 2^15 voxels a side seen at a sane scale:
-/// one instruction on a chip with a divider, where the `i64` one is a
-/// library call of about a hundred), else in `i64`.
-#[inline]
-fn div_floor(n: i64, d: i64) -> i64 {
-    debug_assert!(d > 0);
-    match (i32::try_from(n), i32::try_from(d)) {
-        (Ok(n), Ok(d)) => crate::numeric::div_floor_i32(n, d) as i64,
-        _ => n.div_euclid(d),
+/// The integers [`Slice::row`] solves in.
+trait RowInt:
+    Copy
+    + Ord
+    + From<i32>
+    + core::ops::Add<Output = Self>
+    + core::ops::Sub<Output = Self>
+    + core::ops::Mul<Output = Self>
+{
+    /// `floor(self / d)` for `d > 0`.
+    fn div_floor(self, d: Self) -> Self;
+    /// The low 32 bits.
+    fn low(self) -> i32;
+    /// The low 32 bits of `self + s k`.
+    fn low_plus(self, s: i32, k: Self) -> i32 {
+        self.low().wrapping_add(s.wrapping_mul(k.low()))
     }
+}
+
+impl RowInt for i32 {
+    #[inline(always)]
+    fn div_floor(self, d: i32) -> i32 {
+        crate::numeric::div_floor_i32(self, d)
+    }
+    #[inline(always)]
+    fn low(self) -> i32 {
+        self
+    }
+}
+
+impl RowInt for i64 {
+    /// By a 32-bit division when both fit `i32` (one instruction on a
+    /// chip with a divider, where the `i64` one is a library call of
+    /// about a hundred), else in `i64`.
+    #[inline]
+    fn div_floor(self, d: i64) -> i64 {
+        match (i32::try_from(self), i32::try_from(d)) {
+            (Ok(n), Ok(d)) => crate::numeric::div_floor_i32(n, d) as i64,
+            _ => self.div_euclid(d),
+        }
+    }
+    #[inline(always)]
+    fn low(self) -> i32 {
+        self as i32
+    }
+}
+
+/// Whether a slice's rows can be solved in `i32`: every coordinate at the
+/// anchor column of its rows and every step below `2^28` in magnitude
+/// (then `b`, `top - b`, the quotients and `k` bounds stay below `2^30`;
+/// voxel coordinates stay below `2^26`, [`super::MAX_VOLUME_SIDE`]).
+fn narrow(t0: [i32; 3], tx: [i32; 3], ty: [i32; 3], bounds: Rect) -> bool {
+    const LIM: i64 = 1 << 28;
+    let last = bounds.h.saturating_sub(1) as i64;
+    (0..3).all(|i| {
+        let (a, b) = (t0[i] as i64, t0[i] as i64 + ty[i] as i64 * last);
+        a.abs() < LIM && b.abs() < LIM && (tx[i] as i64).abs() < LIM
+    }) && bounds.w < 1 << 15
+        && bounds.x.unsigned_abs() < 1 << 28
 }
 
 /// A 3x3 matrix inverse by the adjugate; `None` when singular or not
@@ -287,14 +353,79 @@ pub(crate) fn slice<S: Real, const K: usize>(
                 t[2].to_fixed(16).ok_or(Error::Degenerate)?,
             ])
         };
+        let (t0, tx, ty) = (fx(e)?, fx([exx, eyx, S::ZERO])?, fx([exy, eyy, S::ZERO])?);
         let slice = Slice {
             z: z.clamp(0, 65535) as u16,
             bounds,
-            t0: fx(e)?,
-            tx: fx([exx, eyx, S::ZERO])?,
-            ty: fx([exy, eyy, S::ZERO])?,
+            t0,
+            tx,
+            ty,
+            narrow: narrow(t0, tx, ty, bounds),
         };
         out.push(slice).map_err(|_| Error::ListFull)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The `i32` solve equals the `i64` one on every row of random narrow
+    /// slices, across the `2^28` limits' neighbourhood and with zero
+    /// steps; `narrow` refuses slices whose rows would not fit.
+    #[test]
+    fn narrow_rows_equal_wide_rows() {
+        let mut next = crate::numeric::xorshift(31);
+        let mut tried = 0;
+        for k in 0..3000 {
+            let scale = [1 << 12, 1 << 18, 1 << 24, (1 << 28) / 70][k % 4];
+            let mut r = || (next() as i32 as i64 % scale) as i32;
+            let bounds = Rect::new(r() % 50, r() % 50, 1 + (r().unsigned_abs() % 64), 64);
+            let (t0, mut tx, ty) = (
+                [r(), r(), r()],
+                [r(), r(), r()],
+                [r() / 8, r() / 8, r() / 8],
+            );
+            if k % 7 == 0 {
+                tx[k % 3] = 0;
+            }
+            let top = [9 << 16, 31 << 16, 1023 << 16];
+            let mut s = Slice {
+                z: 0,
+                bounds,
+                t0,
+                tx,
+                ty,
+                narrow: narrow(t0, tx, ty, bounds),
+            };
+            if !s.narrow {
+                continue;
+            }
+            tried += 1;
+            for py in bounds.y..bounds.y + bounds.h as i32 {
+                let (lo, hi) = (bounds.x, bounds.x + bounds.w as i32);
+                let got = s.row(py, lo, hi, top);
+                s.narrow = false;
+                let want = s.row(py, lo, hi, top);
+                s.narrow = true;
+                if want.0 < want.1 {
+                    assert_eq!(got, want, "{s:?} row {py}");
+                } else {
+                    assert!(got.0 >= got.1, "{s:?} row {py}");
+                }
+            }
+        }
+        assert!(tried > 1000, "{tried}");
+        let big = Slice {
+            z: 0,
+            bounds: Rect::new(0, 0, 8, 8),
+            t0: [1 << 29, 0, 0],
+            tx: [1; 3],
+            ty: [0; 3],
+            narrow: false,
+        };
+        assert!(!narrow(big.t0, big.tx, big.ty, big.bounds));
+        assert!(!narrow([0; 3], [0; 3], [1 << 26, 0, 0], big.bounds));
+    }
 }

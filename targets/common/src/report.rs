@@ -174,14 +174,15 @@ pub fn report_phases<K: SceneKind, const N: usize, const BC: usize, const BT: us
 
 /// Prints `volume MODE prepare P setup S phase1 A phase2 B samples N
 /// composited C skipped K crc X` for each of [`crate::volumes::MODES`]
-/// ([`crate::volumes`]; 129 KB of volume on the stack).
+/// ([`crate::volumes`]; 133 KB of volume on the stack).
 #[inline(never)]
 pub fn report_volume(out: &mut impl Write, clock: &mut impl Clock) -> core::fmt::Result {
-    use crate::volumes::{BRICK_BYTES, MODES, VOXELS};
+    use crate::volumes::{BRICK_BYTES, CELL_BYTES, MODES, VOXELS};
     let mut density = [0u8; VOXELS];
     let mut normals = [0u8; 3 * VOXELS];
     let mut bricks = [0u8; BRICK_BYTES];
-    match crate::volumes::run(&mut density, &mut normals, &mut bricks, clock) {
+    let mut cells = [0u8; CELL_BYTES];
+    match crate::volumes::run(&mut density, &mut normals, &mut bricks, &mut cells, clock) {
         Ok(runs) => {
             for (mode, r) in MODES.iter().zip(runs) {
                 let s = r.stats;

@@ -4,15 +4,16 @@
 //! 32 x 32 tiles, then by per-slice shading (the baseline), then by normal
 //! blending again skipping the bricks the transfer function makes
 //! transparent (4-cell bricks, 1 KB of ranges made on the device; the
-//! same frame) — each phase timed, the frames hashed so the host can
-//! check every bit.
+//! same frame), then skipping the cells it makes transparent (one bit a
+//! cell, 4 KB made on the device; the same frame) — each phase timed, the
+//! frames hashed so the host can check every bit.
 
 use crate::Clock;
 use tilerast::geometry::{Angle, Mat4};
 use tilerast::prelude::*;
 use tilerast::volume::{
-    brick_bytes, sphere, Compositor, NormalBlending, PerSliceShading, TfPoint, Transfer, Volume,
-    VolumeLights, VolumePlane, VolumeStats, VolumeView,
+    brick_bytes, sphere, visible_cell_bytes, Compositor, NormalBlending, PerSliceShading, TfPoint,
+    Transfer, Volume, VolumeLights, VolumePlane, VolumeStats, VolumeView,
 };
 
 /// Volume side, voxels.
@@ -27,9 +28,16 @@ pub const VOL_SLICES: u16 = 32;
 pub const BRICK_SHIFT: u32 = 2;
 /// Bytes of brick ranges.
 pub const BRICK_BYTES: usize = brick_bytes([VOL_SIDE; 3], BRICK_SHIFT);
+/// Bytes of cell bits.
+pub const CELL_BYTES: usize = visible_cell_bytes([VOL_SIDE; 3]);
 /// The runs [`run`] returns, in order: normal blending, per-slice shading,
-/// normal blending skipping transparent bricks.
-pub const MODES: [&str; 3] = ["normal_blending", "per_slice", "normal_bricks"];
+/// normal blending skipping transparent bricks, then transparent cells.
+pub const MODES: [&str; 4] = [
+    "normal_blending",
+    "per_slice",
+    "normal_bricks",
+    "normal_cells",
+];
 /// Tile side.
 const TILE: u16 = 32;
 /// Tile capacity, groups of 8 pixels.
@@ -43,7 +51,7 @@ pub type VolumeConfig = St7789Config;
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct VolumeRun {
     /// Ticks: making the sphere and quantising its normals (once; and
-    /// its brick ranges, for the run that skips).
+    /// its brick ranges or cell bits, for the runs that skip).
     pub prepare: u32,
     /// Ticks: slicing (once a frame).
     pub setup: u32,
@@ -66,22 +74,25 @@ pub fn transfer() -> Result<Transfer, Error> {
     ])
 }
 
-/// Renders the workload three times ([`MODES`]) into `density`, `normals`
-/// and `bricks` (the volume's RAM: 32 KB, 96 KB and 1 KB).
+/// Renders the workload four times ([`MODES`]) into `density`, `normals`,
+/// `bricks` and `cells` (the volume's RAM: 32 KB, 96 KB, 1 KB and 4 KB).
 pub fn run(
     density: &mut [u8; VOXELS],
     normals: &mut [u8; 3 * VOXELS],
     bricks: &mut [u8; BRICK_BYTES],
+    cells: &mut [u8; CELL_BYTES],
     clock: &mut impl Clock,
-) -> Result<[VolumeRun; 3], Error> {
+) -> Result<[VolumeRun; 4], Error> {
     clock.lap();
     sphere(VOL_SIDE, density)?;
     Volume::new(density, [VOL_SIDE; 3])?.compute_normals(normals)?;
     let prepare = clock.lap();
     Volume::new(density, [VOL_SIDE; 3])?.compute_bricks(BRICK_SHIFT, bricks)?;
     let prepare_bricks = prepare + clock.lap();
-    let vol = Volume::new(density, [VOL_SIDE; 3])?.with_normals(normals)?;
     let tf = transfer()?;
+    Volume::new(density, [VOL_SIDE; 3])?.compute_visible_cells(&tf, cells)?;
+    let prepare_cells = prepare + clock.lap();
+    let vol = Volume::new(density, [VOL_SIDE; 3])?.with_normals(normals)?;
     let model =
         Mat4::<f32>::rotation_y(Angle::degrees(25)).mul(&Mat4::rotation_x(Angle::degrees(-20)));
     let view = Mat4::look_at([0.0, 0.0, 2.0], [0.0; 3], [0.0, 1.0, 0.0])?;
@@ -101,10 +112,20 @@ pub fn run(
         screen,
         VOL_SLICES,
     )?;
+    let culling: VolumeView<'_, { VOL_SLICES as usize }> = VolumeView::new(
+        vol.with_visible_cells(cells)?,
+        &tf,
+        &model,
+        &view,
+        &proj,
+        screen,
+        VOL_SLICES,
+    )?;
     let mut tile: Tile<G, VolumeConfig> = Tile::new();
     let normal = frame(&mut tile, &scene, &NormalBlending, &lights, clock)?;
     let per_slice = frame(&mut tile, &scene, &PerSliceShading(&lights), &lights, clock)?;
     let bricked = frame(&mut tile, &skipping, &NormalBlending, &lights, clock)?;
+    let celled = frame(&mut tile, &culling, &NormalBlending, &lights, clock)?;
     let with = |r: VolumeRun, prepare| VolumeRun {
         prepare,
         setup,
@@ -114,6 +135,7 @@ pub fn run(
         with(normal, prepare),
         with(per_slice, prepare),
         with(bricked, prepare_bricks),
+        with(celled, prepare_cells),
     ])
 }
 
