@@ -453,7 +453,7 @@ pub struct VolumeSpec {
     /// Compositing.
     #[serde(default)]
     pub mode: ModeKind,
-    /// Skip the samples of bricks the transfer function makes transparent
+    /// Skip the samples of cells the transfer function makes transparent
     /// (empty-space skipping: the same image, fewer fetches).
     #[serde(default = "default_true")]
     pub skip_empty: bool,
@@ -532,9 +532,25 @@ pub struct VolumeScene {
     pub transfer: Transfer,
     /// The spec it came from.
     pub spec: VolumeSpec,
+    /// [`Volume::compute_visible_cells`] of the data for the table (one
+    /// bit a voxel), what `skip_empty` skips by; empty: it skips by the
+    /// data's bricks instead.
+    pub cells: Vec<u8>,
 }
 
 impl VolumeScene {
+    /// A scene of `data` through `transfer`, its cells classified once.
+    pub fn new(data: VolumeData, transfer: Transfer, spec: VolumeSpec) -> Result<Self> {
+        let mut cells = vec![0u8; tilerast::volume::visible_cell_bytes(data.dims)];
+        Volume::new(&data.density, data.dims)?.compute_visible_cells(&transfer, &mut cells)?;
+        Ok(VolumeScene {
+            data,
+            transfer,
+            spec,
+            cells,
+        })
+    }
+
     /// Loads the data a spec names (files relative to `base`, each at most
     /// `limits.max_bytes` of data) and checks the rest.
     pub fn load(
@@ -586,11 +602,7 @@ impl VolumeScene {
         for l in &spec.lights {
             finite("a light", l)?;
         }
-        let scene = VolumeScene {
-            data,
-            transfer,
-            spec,
-        };
+        let scene = VolumeScene::new(data, transfer, spec).map_err(e)?;
         let s = &scene.spec;
         let eye = s.eye.map(Readable);
         let cam = scene.camera(64, 64).map_err(|e| {
@@ -625,9 +637,14 @@ impl VolumeScene {
         w: u16,
         h: u16,
     ) -> Result<Box<VolumeView<'_, MAX_SLICES>>> {
-        let vol = self
-            .data
-            .volume(run.normals == NormalsKind::Quantized, run.skip_empty)?;
+        let quantized = run.normals == NormalsKind::Quantized;
+        let vol = if run.skip_empty && !self.cells.is_empty() {
+            self.data
+                .volume(quantized, false)?
+                .with_visible_cells(&self.cells)?
+        } else {
+            self.data.volume(quantized, run.skip_empty)?
+        };
         let screen = Rect::new(0, 0, w as u32, h as u32);
         Ok(Box::new(VolumeView::new(
             vol,

@@ -140,11 +140,7 @@ pub fn scene(data: VolumeData, tf: &str, mono: bool, slices: u16) -> Result<Volu
         ..VolumeSpec::new(transfer(tf, mono))
     };
     let transfer = tilerast_sim::volume::transfer(&spec.transfer)?;
-    Ok(VolumeScene {
-        data,
-        transfer,
-        spec,
-    })
+    VolumeScene::new(data, transfer, spec).map_err(|e| e.to_string())
 }
 
 fn run_once(
@@ -277,9 +273,12 @@ pub fn run(sets: &[(String, VolumeData)], runs: usize) -> Result<Vec<Row>, Strin
 pub struct BrickRow {
     /// Dataset name.
     pub name: String,
-    /// Brick side as a shift; `None`: no skipping.
+    /// Brick side as a shift; `None`: no skipping, or the cells' bits
+    /// (`cells`).
     pub shift: Option<u32>,
-    /// Bytes of brick ranges.
+    /// Skipping by the cells' bits, made for the transfer function.
+    pub cells: bool,
+    /// Bytes of brick ranges or cell bits.
     pub bytes: usize,
     /// Samples taken.
     pub samples: u64,
@@ -308,8 +307,12 @@ pub fn bricks(sets: &[(String, VolumeData)], runs: usize) -> Result<Vec<BrickRow
             NormalsKind::Quantized,
             false,
         )?;
-        for shift in std::iter::once(None).chain(tilerast::volume::BRICK_SHIFTS.map(Some)) {
-            let vs = match shift {
+        // No skipping, each brick side (by ranges), then the cells' bits.
+        let sweep = std::iter::once((None, false))
+            .chain(tilerast::volume::BRICK_SHIFTS.map(|k| (Some(k), false)))
+            .chain([(None, true)]);
+        for (shift, cells) in sweep {
+            let mut vs = match shift {
                 Some(k) => scene(
                     data.clone()
                         .with_brick_shift(k)
@@ -320,24 +323,28 @@ pub fn bricks(sets: &[(String, VolumeData)], runs: usize) -> Result<Vec<BrickRow
                 )?,
                 None => plain.clone(),
             };
+            if !cells {
+                vs.cells.clear();
+            }
+            let skip = shift.is_some() || cells;
             let mut p1 = vec![];
             let mut last = None;
             for _ in 0..runs {
-                let (img, t) = run_once(
-                    &vs,
-                    &cfg,
-                    ModeKind::Normal,
-                    NormalsKind::Quantized,
-                    shift.is_some(),
-                )?;
+                let (img, t) = run_once(&vs, &cfg, ModeKind::Normal, NormalsKind::Quantized, skip)?;
                 p1.push(t.phase1_ns);
                 last = Some((img, t.stats));
             }
             let (img, stats) = last.ok_or("no run")?;
+            let bytes = match shift {
+                Some(k) => tilerast::volume::brick_bytes(data.dims, k),
+                None if cells => vs.cells.len(),
+                None => 0,
+            };
             rows.push(BrickRow {
                 name: name.to_string(),
                 shift,
-                bytes: shift.map_or(0, |k| tilerast::volume::brick_bytes(data.dims, k)),
+                cells,
+                bytes,
                 samples: stats.samples as u64,
                 skipped: stats.skipped as u64,
                 phase1_ms: median(p1) / 1e6,
@@ -357,7 +364,7 @@ pub fn brick_chart(rows: &[BrickRow]) -> Result<Image, String> {
         let x = |b: usize| ((b as f64) + 64.0).log2();
         let mut c = ChartBuilder::on(area)
             .caption(
-                "Empty-space skipping: phase I ms against brick bytes (256^2)",
+                "Empty-space skipping: phase I ms against bytes (256^2; x: cell bits)",
                 (SANS, 18),
             )
             .margin(12)
@@ -377,10 +384,19 @@ pub fn brick_chart(rows: &[BrickRow]) -> Result<Image, String> {
         ] {
             let pts: Vec<(f64, f64)> = rows
                 .iter()
-                .filter(|r| r.name == name)
+                .filter(|r| r.name == name && !r.cells)
                 .map(|r| (x(r.bytes), r.phase1_ms))
                 .collect();
             line_with_dots(&mut c, pts, name, color)?;
+            // The cells' bits: one point, a cross.
+            for r in rows.iter().filter(|r| r.name == name && r.cells) {
+                c.draw_series(std::iter::once(Cross::new(
+                    (x(r.bytes), r.phase1_ms),
+                    7,
+                    color.stroke_width(2),
+                )))
+                .map_err(err)?;
+            }
         }
         legend(&mut c, SeriesLabelPosition::UpperRight)
     })
@@ -533,8 +549,9 @@ pub fn report(
          real MRI head (`{MRI}`, resampled trilinearly). Instructions on the emulated Cortex-M4 for a 32^3 \
          sphere are in `reports/targets.md`.\n\n\
          ## Table 2 analogue\n\n\
-         Both methods skip the samples of 4-cell bricks the transfer function makes transparent \
-         (empty-space skipping: the same image, see below); *phase I, all* fetches every sample.\n\n\
+         Both methods skip the samples of cells the transfer function makes transparent (one bit a \
+         voxel, made for the table: empty-space skipping, the same image, see below); *phase I, all* \
+         fetches every sample.\n\n\
          | dataset | viewport | slices | samples | skipped | blended | set-up ms | phase I ms | phase I, all ms | phase II ms | total ms | per-slice ms | speed-up | on-the-fly normals ms |\n\
          |---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
     );
@@ -547,11 +564,14 @@ pub fn report(
         );
     }
     md += &format!(
-        "\n## Empty-space skipping: the brick side\n\n\
+        "\n## Empty-space skipping: the brick side, and cell bits\n\n\
          Each brick keeps the density range of the voxels its samples read (two bytes); a sample in a \
          brick whose whole range has zero opacity is skipped before its fetch. Trilinear interpolation \
          stays inside its corners' range, so the image is the same, every byte (*exact*). Smaller \
-         bricks skip more and cost more bytes. Normal blending at 256^2, median of {runs}.\n\n\
+         bricks skip more and cost more bytes. *Cell bits* classify each cell through the transfer \
+         function once (`Volume::compute_visible_cells`, one bit a voxel, made again when the table \
+         changes; the ranges are not): the finest test, read from a sample's integer coordinates \
+         alone. Normal blending at 256^2, median of {runs}.\n\n\
          | dataset | brick side | bytes | samples | skipped | skipped % | phase I ms | exact |\n\
          |---|---|---|---|---|---|---|---|\n"
     );
@@ -559,8 +579,11 @@ pub fn report(
         md += &format!(
             "| {} | {} | {} | {} | {} | {:.1}% | {:.2} | {} |\n",
             b.name,
-            b.shift
-                .map_or("no skipping".to_string(), |k| format!("{} cells", 1 << k)),
+            match (b.shift, b.cells) {
+                (Some(k), _) => format!("{} cells", 1 << k),
+                (None, true) => "cell bits".to_string(),
+                (None, false) => "no skipping".to_string(),
+            },
             b.bytes,
             b.samples,
             b.skipped,

@@ -437,8 +437,9 @@ fn mesh_frame<S: tilerast::geometry::Real>(
 /// rotation, the eye distance, the slice count, two transfer points and a
 /// light; the rest are densities (repeated to fill the volume). Slicing
 /// never panics (overflow checks on) and fails only with documented
-/// errors; tiles change no pixel; with one colour, normal blending and
-/// per-slice shading agree within [`tilerast_sim::volume::equality_bound`].
+/// errors; tiles change no pixel; skipping by bricks or by cell bits
+/// changes no pixel; with one colour, normal blending and per-slice
+/// shading agree within [`tilerast_sim::volume::equality_bound`].
 pub fn volume(data: &[u8]) -> bool {
     use tilerast::geometry::Fx;
     if data.len() < 17 {
@@ -556,6 +557,22 @@ fn volume_frames<S: tilerast::geometry::Real>(density: &[u8], dims: [u16; 3], p:
     .expect("the same slicing");
     let (s, _) = draw(&skipping, &NormalBlending, &lights, true);
     assert_eq!(a, s, "skipping empty bricks changed the volume");
+    // And by the cells' bits, made for the table: the same image.
+    let mut bits = vec![0u8; visible_cell_bytes(dims)];
+    vol.compute_visible_cells(&tf, &mut bits)
+        .expect("room for the bits");
+    let culling = VolumeView::<'_, 40>::new(
+        vol.with_visible_cells(&bits).expect("the bits' length"),
+        &tf,
+        &model,
+        &view_m,
+        &proj,
+        screen,
+        slices,
+    )
+    .expect("the same slicing");
+    let (c, _) = draw(&culling, &NormalBlending, &lights, true);
+    assert_eq!(a, c, "skipping clear cells changed the volume");
     let (ps, _) = draw(&view, &PerSliceShading(&lights), &lights, true);
     let l64 = l.map(|v| v.to_fixed(16).unwrap_or(0) as f64 / 65536.0);
     let bound =

@@ -39,11 +39,7 @@ fn spec(
 
 fn volume_scene(data: VolumeData, spec: VolumeSpec) -> VolumeScene {
     let transfer = tilerast_sim::volume::transfer(&spec.transfer).unwrap();
-    VolumeScene {
-        data,
-        transfer,
-        spec,
-    }
+    VolumeScene::new(data, transfer, spec).unwrap()
 }
 
 fn run(mode: ModeKind, slices: u16) -> VolumeRun {
@@ -130,9 +126,10 @@ proptest! {
     #![proptest_config(ProptestConfig::with_cases(cases(16)))]
 
     /// Empty-space skipping changes no byte: random volumes, rotations,
-    /// transfer thresholds, brick sides and both compositing modes give
-    /// the same image, depth and counts with and without it, and only the
-    /// skipped samples (never a blended one) go unfetched.
+    /// transfer thresholds, brick sides, by bricks or by cells, and both
+    /// compositing modes give the same image, depth and counts with and
+    /// without it, and only the skipped samples (never a blended one) go
+    /// unfetched.
     #[test]
     fn skipping_empty_bricks_changes_nothing(
         seed in 0u64..1000,
@@ -140,12 +137,16 @@ proptest! {
         clear in 0.0f64..250.0,
         shift in tilerast::volume::BRICK_SHIFTS,
         per_slice in any::<bool>(),
+        by_cells in any::<bool>(),
         slices in 4u16..40,
     ) {
         let tf = vec![[clear, 0.0, 200.0, 180.0, 90.0], [(clear + 5.0).min(255.0), 150.0, 90.0, 180.0, 200.0]];
         let data = blobs(seed, 20).with_brick_shift(shift).unwrap();
         let lights = vec![[0.3, 0.5, 1.0, 0.8]];
-        let vs = volume_scene(data, spec(tf, rot, lights.clone(), slices));
+        let mut vs = volume_scene(data, spec(tf, rot, lights.clone(), slices));
+        if !by_cells {
+            vs.cells.clear();
+        }
         let c = cfg(40, (40, 20));
         let mode = if per_slice { ModeKind::PerSlice } else { ModeKind::Normal };
         let on = run(mode, slices);

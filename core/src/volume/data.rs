@@ -440,22 +440,15 @@ impl<'a> Volume<'a> {
         }
     }
 
-    /// Whether the cell a sample at 16.16 voxel coordinate `t` (each
-    /// inside `[0, (dims - 1) << 16]`) reads may hold a visible sample:
-    /// its bit of [`Volume::with_visible_cells`] (`true` without them),
-    /// indexed by the integer parts alone (the top faces' bits repeat the
-    /// cells below).
+    /// The cells' visibility bits ([`Volume::with_visible_cells`]) with
+    /// what indexes them, for phase I's walk.
     #[inline(always)]
-    pub(crate) fn visible(&self, t: [i32; 3]) -> bool {
-        let Some(bits) = self.visible else {
-            return true;
-        };
-        let i = self.index(
-            (t[0] >> 16) as usize,
-            (t[1] >> 16) as usize,
-            (t[2] >> 16) as usize,
-        );
-        bits.get(i >> 3).is_none_or(|b| b >> (i & 7) & 1 != 0)
+    pub(crate) fn cell_bits(&self) -> CellBits<'a> {
+        CellBits {
+            bits: self.visible.unwrap_or_default(),
+            w: self.dims[0] as usize,
+            wh: self.dims[0] as usize * self.dims[1] as usize,
+        }
     }
 
     /// The density at 16.16 voxel coordinate `t` (each inside
@@ -573,6 +566,29 @@ fn chunk_checked<const N: usize>(s: &[u8], i: usize) -> [u8; N] {
     *s.get(i..)
         .and_then(|s| s.first_chunk::<N>())
         .unwrap_or(&[0; N])
+}
+
+/// A volume's cells' visibility bits, one a voxel ([`Volume::cell_bits`];
+/// empty without them: every cell visible).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct CellBits<'a> {
+    bits: &'a [u8],
+    w: usize,
+    wh: usize,
+}
+
+impl CellBits<'_> {
+    /// Whether the cell a sample at 16.16 voxel coordinate `t` (each
+    /// inside `[0, (dims - 1) << 16]`) reads may hold a visible sample: its
+    /// bit, indexed by the integer parts alone (the top faces' bits repeat
+    /// the cells below); `true` without bits.
+    #[inline(always)]
+    pub(crate) fn visible(&self, t: [i32; 3]) -> bool {
+        let i = (t[0] >> 16) as usize
+            + self.w * (t[1] >> 16) as usize
+            + self.wh * (t[2] >> 16) as usize;
+        self.bits.get(i >> 3).is_none_or(|b| b >> (i & 7) & 1 != 0)
+    }
 }
 
 /// A sample's cell ([`Volume::cell`]): its lowest corner's voxel index
@@ -876,7 +892,7 @@ mod tests {
                         _ => (next() % (top + 1)) as i32,
                     }
                 });
-                if !vol.visible(t) {
+                if !vol.cell_bits().visible(t) {
                     clear += 1;
                     let (d, _) = vol.sample(t);
                     assert_eq!(tf.weight(d), 0, "{dims:?} {t:?}");

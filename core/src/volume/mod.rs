@@ -548,7 +548,8 @@ impl<const N: usize, K: Cell> VolumePlane<N, K> {
         tf: &Transfer,
         keep: &mut [u8; RUN],
     ) -> (usize, u32, u32) {
-        let (mut m, mut passed, mut skipped) = (0, 0, 0);
+        let (mut m, mut passed) = (0, 0);
+        let bits = vol.cell_bits();
         for k in 0..n.min(RUN) {
             if z < tile.depth.read(first + k) {
                 passed += 1;
@@ -556,13 +557,12 @@ impl<const N: usize, K: Cell> VolumePlane<N, K> {
                     SKIP_BRICKS => vol
                         .brick_range(t)
                         .is_some_and(|(lo, hi)| tf.transparent(lo, hi)),
-                    SKIP_CELLS => !vol.visible(t),
+                    SKIP_CELLS => !bits.visible(t),
                     _ => false,
                 };
-                if empty {
-                    skipped += 1;
-                } else if let Some(slot) = keep.get_mut(m) {
-                    *slot = k as u8;
+                if !empty {
+                    // `m <= k < RUN`.
+                    keep[m % RUN] = k as u8;
                     m += 1;
                 }
             }
@@ -570,7 +570,7 @@ impl<const N: usize, K: Cell> VolumePlane<N, K> {
                 *t += d;
             }
         }
-        (m, passed, skipped)
+        (m, passed, passed - m as u32)
     }
 
     /// Phase I's second pass over a run: samples `t + k tx` for each
