@@ -491,8 +491,8 @@ impl<const N: usize, K: Cell> VolumePlane<N, K> {
         let (mut samples, mut skipped, mut composited) = (0, 0, 0);
         // A row is walked in runs of up to `RUN` pixels, in two passes:
         // the first tests depth (and bricks or cells) with few values live
-        // and lists the cells of the samples to fetch; the second fetches,
-        // classifies and blends only those. One pass carrying both kept
+        // and lists the samples to fetch; the second fetches, classifies
+        // and blends only those. One pass carrying both kept
         // the fetch's values spilled on every pixel. Each sample lands in
         // its own cell of the plane, so the order of blends is unchanged.
         let mut keep = [0u8; RUN];
@@ -532,9 +532,9 @@ impl<const N: usize, K: Cell> VolumePlane<N, K> {
     /// Phase I's first pass over a run of `n <= RUN` pixels from tile
     /// index `first`, the first at voxel coordinate `t`: lists in `keep`
     /// the samples nearer than the depth plane and not in clear bricks or
-    /// cells. Returns how many it listed, how many
-    /// passed the depth test, how many of those it skipped. Not inlined:
-    /// the walk's state stays out of its registers.
+    /// cells. Returns how many it listed, how many passed the depth test,
+    /// how many of those it skipped. Not inlined: the walk's state stays
+    /// out of its registers.
     #[allow(clippy::too_many_arguments)]
     #[inline(never)]
     fn walk_run<const TN: usize, C: TileConfig, const SKIP: u8>(
