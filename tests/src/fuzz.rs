@@ -545,32 +545,18 @@ fn volume_frames<S: tilerast::geometry::Real>(density: &[u8], dims: [u16; 3], p:
     let mut bricks = vec![0u8; brick_bytes(dims, shift)];
     vol.compute_bricks(shift, &mut bricks)
         .expect("room for the bricks");
-    let skipping = VolumeView::<'_, 40>::new(
-        vol.with_bricks(&bricks, shift).expect("the bricks' length"),
-        &tf,
-        &model,
-        &view_m,
-        &proj,
-        screen,
-        slices,
-    )
-    .expect("the same slicing");
+    let sliced = |v| {
+        VolumeView::<'_, 40>::new(v, &tf, &model, &view_m, &proj, screen, slices)
+            .expect("the same slicing")
+    };
+    let skipping = sliced(vol.with_bricks(&bricks, shift).expect("the bricks' length"));
     let (s, _) = draw(&skipping, &NormalBlending, &lights, true);
     assert_eq!(a, s, "skipping empty bricks changed the volume");
     // And by the cells' bits, made for the table: the same image.
     let mut bits = vec![0u8; visible_cell_bytes(dims)];
     vol.compute_visible_cells(&tf, &mut bits)
         .expect("room for the bits");
-    let culling = VolumeView::<'_, 40>::new(
-        vol.with_visible_cells(&bits).expect("the bits' length"),
-        &tf,
-        &model,
-        &view_m,
-        &proj,
-        screen,
-        slices,
-    )
-    .expect("the same slicing");
+    let culling = sliced(vol.with_visible_cells(&bits).expect("the bits' length"));
     let (c, _) = draw(&culling, &NormalBlending, &lights, true);
     assert_eq!(a, c, "skipping clear cells changed the volume");
     let (ps, _) = draw(&view, &PerSliceShading(&lights), &lights, true);

@@ -713,6 +713,19 @@ mod tests {
     extern crate std;
     use super::*;
 
+    /// A 16.16 point inside a volume of `dims`: on the low face, the top
+    /// face or random, by axis, as `k` runs.
+    fn point(dims: [u16; 3], k: usize, next: &mut impl FnMut() -> u64) -> [i32; 3] {
+        core::array::from_fn(|a| {
+            let top = ((dims[a] as i64 - 1) << 16) as u64;
+            match (k + a) % 5 {
+                0 => 0,
+                1 => top as i32,
+                _ => (next() % (top + 1)) as i32,
+            }
+        })
+    }
+
     #[test]
     fn isqrt_is_exact() {
         for v in (0..5000u64).chain([u32::MAX as u64, u64::MAX >> 2, 1 << 40]) {
@@ -802,14 +815,7 @@ mod tests {
             plain.compute_normals(&mut n).unwrap();
             let q = plain.with_normals(&n).unwrap();
             for k in 0..4000 {
-                let t: [i32; 3] = core::array::from_fn(|a| {
-                    let top = ((dims[a] as i64 - 1) << 16) as u64;
-                    match (k + a) % 5 {
-                        0 => 0,
-                        1 => top as i32,
-                        _ => (next() % (top + 1)) as i32,
-                    }
-                });
+                let t = point(dims, k, &mut next);
                 let (want, wq, wf) = reference(&plain, &n, t);
                 let (got, probe) = q.sample(t);
                 assert_eq!(got, want, "{dims:?} {t:?}");
@@ -884,14 +890,7 @@ mod tests {
             plain.compute_visible_cells(&tf, &mut bits).unwrap();
             let vol = plain.with_visible_cells(&bits).unwrap();
             for k in 0..4000 {
-                let t: [i32; 3] = core::array::from_fn(|a| {
-                    let top = ((dims[a] as i64 - 1) << 16) as u64;
-                    match (k + a) % 5 {
-                        0 => 0,
-                        1 => top as i32,
-                        _ => (next() % (top + 1)) as i32,
-                    }
-                });
+                let t = point(dims, k, &mut next);
                 if !vol.cell_bits().visible(t) {
                     clear += 1;
                     let (d, _) = vol.sample(t);

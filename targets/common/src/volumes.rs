@@ -103,24 +103,11 @@ pub fn run(
     let scene: VolumeView<'_, { VOL_SLICES as usize }> =
         VolumeView::new(vol, &tf, &model, &view, &proj, screen, VOL_SLICES)?;
     let setup = clock.lap();
-    let skipping: VolumeView<'_, { VOL_SLICES as usize }> = VolumeView::new(
-        vol.with_bricks(bricks, BRICK_SHIFT)?,
-        &tf,
-        &model,
-        &view,
-        &proj,
-        screen,
-        VOL_SLICES,
-    )?;
-    let culling: VolumeView<'_, { VOL_SLICES as usize }> = VolumeView::new(
-        vol.with_visible_cells(cells)?,
-        &tf,
-        &model,
-        &view,
-        &proj,
-        screen,
-        VOL_SLICES,
-    )?;
+    let sliced = |v| -> Result<VolumeView<'_, { VOL_SLICES as usize }>, Error> {
+        VolumeView::new(v, &tf, &model, &view, &proj, screen, VOL_SLICES)
+    };
+    let skipping = sliced(vol.with_bricks(bricks, BRICK_SHIFT)?)?;
+    let culling = sliced(vol.with_visible_cells(cells)?)?;
     let mut tile: Tile<G, VolumeConfig> = Tile::new();
     let normal = frame(&mut tile, &scene, &NormalBlending, &lights, clock)?;
     let per_slice = frame(&mut tile, &scene, &PerSliceShading(&lights), &lights, clock)?;
