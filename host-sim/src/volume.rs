@@ -539,10 +539,14 @@ pub struct VolumeScene {
 }
 
 impl VolumeScene {
-    /// A scene of `data` through `transfer`, its cells classified once.
+    /// A scene of `data` through `transfer`, its cells classified once
+    /// when the spec skips empty space (else no bits are held).
     pub fn new(data: VolumeData, transfer: Transfer, spec: VolumeSpec) -> Result<Self> {
-        let mut cells = vec![0u8; tilerast::volume::visible_cell_bytes(data.dims)];
-        Volume::new(&data.density, data.dims)?.compute_visible_cells(&transfer, &mut cells)?;
+        let mut cells = Vec::new();
+        if spec.skip_empty {
+            cells = vec![0u8; tilerast::volume::visible_cell_bytes(data.dims)];
+            Volume::new(&data.density, data.dims)?.compute_visible_cells(&transfer, &mut cells)?;
+        }
         Ok(VolumeScene {
             data,
             transfer,
