@@ -82,6 +82,7 @@ mod data;
 mod slice;
 mod transfer;
 
+use data::CellBits;
 pub use data::{
     brick_bytes, sphere, visible_cell_bytes, Normals, Volume, BRICK_SHIFTS, MAX_VOLUME_SIDE,
     NORMAL_ONE,
@@ -496,6 +497,8 @@ impl<const N: usize, K: Cell> VolumePlane<N, K> {
         // the fetch's values spilled on every pixel. Each sample lands in
         // its own cell of the plane, so the order of blends is unchanged.
         let mut keep = [0u8; RUN];
+        // Taken out of the volume once: the first pass sees a plain slice.
+        let bits = vol.cell_bits();
         for s in view.slices.iter() {
             let Some(r) = s.bounds.intersect(&area) else {
                 continue;
@@ -509,8 +512,9 @@ impl<const N: usize, K: Cell> VolumePlane<N, K> {
                 while cx < x1 {
                     let n = (x1 - cx).min(RUN as i32) as usize;
                     let first = (row + cx) as usize;
-                    let (m, passed, empty) =
-                        Self::walk_run::<TN, C, SKIP>(tile, first, n, z, t, tx, vol, tf, &mut keep);
+                    let (m, passed, empty) = Self::walk_run::<TN, C, SKIP>(
+                        tile, first, n, z, t, tx, vol, bits, tf, &mut keep,
+                    );
                     samples += passed;
                     skipped += empty;
                     if let Some(cells) = cells.get_mut(first..) {
@@ -545,14 +549,18 @@ impl<const N: usize, K: Cell> VolumePlane<N, K> {
         mut t: [i32; 3],
         tx: [i32; 3],
         vol: &Volume<'_>,
+        bits: CellBits<'_>,
         tf: &Transfer,
         keep: &mut [u8; RUN],
     ) -> (usize, u32, u32) {
-        let (mut m, mut passed) = (0, 0);
-        let bits = vol.cell_bits();
-        for k in 0..n.min(RUN) {
-            if z < tile.depth.read(first + k) {
-                passed += 1;
+        let n = n.min(RUN);
+        // Depth failures are counted (rare where nothing is drawn in
+        // front), not passes: one add fewer a sample.
+        let (mut m, mut hidden) = (0, 0);
+        for k in 0..n {
+            if z >= tile.depth.read(first + k) {
+                hidden += 1;
+            } else {
                 let empty = match SKIP {
                     SKIP_BRICKS => vol
                         .brick_range(t)
@@ -570,6 +578,7 @@ impl<const N: usize, K: Cell> VolumePlane<N, K> {
                 *t += d;
             }
         }
+        let passed = n as u32 - hidden;
         (m, passed, passed - m as u32)
     }
 
