@@ -30,7 +30,7 @@ use tilerast::geometry::{Angle, Mat4};
 use tilerast::prelude::*;
 use tilerast::volume::{
     Compositor, NormalBlending, NormalCell, PerSliceShading, TfPoint, Transfer, Volume,
-    VolumeLights, VolumePlane, VolumeStats, VolumeView,
+    VolumeLights, VolumePlane, VolumeStats, VolumeView, NORMAL_ONE,
 };
 
 /// Pixel capacity (groups of 8) of a volume scene's tile: 16,384 pixels
@@ -860,7 +860,8 @@ fn paint_normals(area: Rect, plane: &VolumePlane<VOLUME_GROUPS, NormalCell>, ima
             let a = c.a as f64 / 32768.0;
             let rgb = if a > 0.0 {
                 c.n.map(|v| {
-                    (128.0 + 127.0 * (v as f64 / 16384.0 / a).clamp(-1.0, 1.0)).round() as u8
+                    (128.0 + 127.0 * (v as f64 / NORMAL_ONE as f64 / a).clamp(-1.0, 1.0)).round()
+                        as u8
                 })
             } else {
                 [0; 3]

@@ -19,10 +19,10 @@
 //!    through a [`Transfer`] table; a transparent sample stops here.
 //! 4. **Normal blending** (§4.2): back to front,
 //!    `N_f = N_s α_s + N_f (1 - α_s)`, likewise the colour and the
-//!    accumulated opacity, in a [`VolumePlane`] of [`NormalCell`]s (Q1.14
-//!    normal, Q1.15 opacity, Q8.8 colour: 14 bytes a pixel) — only in tiles
-//!    of frames that draw a volume: a scene without one holds no plane and
-//!    runs none of this code.
+//!    accumulated opacity, in a [`VolumePlane`] of [`NormalCell`]s (normal
+//!    in [`NORMAL_ONE`] units, Q1.15 opacity, Q8.8 colour: 14 bytes a
+//!    pixel) — only in tiles of frames that draw a volume: a scene without
+//!    one holds no plane and runs none of this code.
 //! 5. **Shading** (§4.3), once per pixel: `I = Σ kd_j L_j · N_f + ka α_f`
 //!    ([`VolumeLights`]; the seed's `kd L·N + ka Ia` with the ambient term
 //!    weighted by the accumulated opacity, so the volume composites over
@@ -163,15 +163,24 @@ impl VolumeLights {
         self.ambient
     }
 
-    /// `Σ_j kd_j L_j · n` (Q1.14 in and out), the linear diffuse term.
+    /// `Σ_j kd_j L_j · n` (Q1.14 in and out), the linear diffuse term, of
+    /// a normal in [`NORMAL_ONE`] units turned to Q1.14 ([`q14`]).
     #[inline(always)]
     fn diffuse(&self, n: [i32; 3]) -> i32 {
+        let n = q14(n);
         let mut s = 0i32;
         for l in &self.dirs {
             s += (l[0] * n[0] + l[1] * n[1] + l[2] * n[2]) >> 14;
         }
         s
     }
+}
+
+/// A normal in [`NORMAL_ONE`] units (`127 x 2^8`) in Q1.14, rounded:
+/// `x 129 / 2^8` (`127 x 129 = 16383`).
+#[inline(always)]
+fn q14(n: [i32; 3]) -> [i32; 3] {
+    n.map(|v| (v * 129 + (1 << 7)) >> 8)
 }
 
 /// A frame's volume: the data, its transfer function and its slices set
@@ -255,7 +264,8 @@ pub trait Cell: Copy {
     fn alpha(&self) -> i32;
 }
 
-/// A pixel of normal blending: the blended normal (Q1.14), opacity (Q1.15)
+/// A pixel of normal blending: the blended normal ([`NORMAL_ONE`] units),
+/// opacity (Q1.15)
 /// and colour (Q8.8), all premultiplied — 14 bytes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct NormalCell {
@@ -307,7 +317,8 @@ const SKIP_BRICKS: u8 = 1;
 const SKIP_CELLS: u8 = 2;
 
 /// `f + (s - f) a` with `a` in Q1.15, rounded: back-to-front "over" of a
-/// sample `s` onto a premultiplied accumulator `f`.
+/// sample `s` onto a premultiplied accumulator `f` (`|s - f| <= 2
+/// NORMAL_ONE < 2^16`: the product stays in `i32`).
 #[inline(always)]
 fn lerp(f: i32, s: i32, a: i32) -> i32 {
     f + (((s - f) * a + (1 << 14)) >> 15)
@@ -317,7 +328,8 @@ fn lerp(f: i32, s: i32, a: i32) -> i32 {
 pub trait Compositor {
     /// The plane's pixel.
     type Cell: Cell;
-    /// Blends a classified sample (normal Q1.14, weight Q1.15, colour).
+    /// Blends a classified sample (normal in [`NORMAL_ONE`] units, weight
+    /// Q1.15, colour).
     fn blend(&self, cell: &mut Self::Cell, n: [i32; 3], a: i32, c: Rgb);
     /// The premultiplied colour a pixel shows (0..255 with 16 fraction
     /// bits, clamped at 0), for its accumulated opacity.
