@@ -1146,26 +1146,31 @@ fn report(reports: &[BoardResult], v6: &Report) -> String {
              normal plane 14 KB). Phase I: slice, classify, composite; phase II: shade. \
              `normal_bricks` is normal blending skipping the samples of 4-cell bricks the transfer \
              function makes transparent (1 KB of brick ranges), `normal_cells` the samples of the \
-             cells it makes transparent (4 KB, a bit a cell, made for the transfer function); both \
-             the same frame as `normal_blending`. \
+             cells it makes transparent (4 KB, a bit a cell, made for the transfer function), and \
+             walks none outside the box of the visible cells; both the same frame as \
+             `normal_blending`. *Samples*: those each mode walks (in the volume, nearer than the \
+             depth plane); *per frame sample*: phase I over the frame's samples (`normal_blending`'s \
+             count, the same frame in every mode); *per walked sample*: over the mode's own. \
              Every mode's frames equal the host's (CRC). `reports/volume.md` has the host's size \
              series.\n\n\
-             | mode | samples | skipped | blended | phase I instr | per sample | phase II instr | per pixel | total instr |\n\
-             | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+             | mode | samples | skipped | blended | phase I instr | per frame sample | per walked sample | phase II instr | per pixel | total instr |\n\
+             | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
             b.board
         );
         let px = (VOL_SCREEN as f64).powi(2);
+        let frame_samples = b.volumes.get("normal_blending").map_or(1, |v| v[4].max(1)) as f64;
         let mut prep = (0, 0);
         for (mode, v) in &b.volumes {
             if *mode == "normal_blending" {
                 prep = (v[0], v[1]);
             }
             md += &format!(
-                "| {mode} | {} | {} | {} | {:.0} | {:.1} | {:.0} | {:.1} | {:.0} |\n",
+                "| {mode} | {} | {} | {} | {:.0} | {:.1} | {:.1} | {:.0} | {:.1} | {:.0} |\n",
                 v[4],
                 v[7],
                 v[5],
                 k(v[2]),
+                k(v[2]) / frame_samples,
                 k(v[2]) / v[4].max(1) as f64,
                 k(v[3]),
                 k(v[3]) / px,

@@ -94,16 +94,26 @@ pub const fn brick_bytes(dims: [u16; 3], shift: u32) -> usize {
 
 /// Bytes [`Volume::compute_visible_cells`] writes for a volume of `dims`:
 /// one bit a voxel (the cell it is the lowest corner of), `x` fastest,
-/// bit `i & 7` of byte `i >> 3`.
+/// bit `i & 7` of byte `i >> 3`; then the box of the set bits, 12 bytes
+/// (lowest and highest voxel an axis, `u16` little-endian; the lowest
+/// above the highest when none is set).
 ///
 /// ```
 /// use tilerast::volume::visible_cell_bytes;
-/// assert_eq!(visible_cell_bytes([32, 32, 32]), 4096);
-/// assert_eq!(visible_cell_bytes([3, 3, 3]), 4);
+/// assert_eq!(visible_cell_bytes([32, 32, 32]), 4096 + 12);
+/// assert_eq!(visible_cell_bytes([3, 3, 3]), 4 + 12);
 /// ```
 pub const fn visible_cell_bytes(dims: [u16; 3]) -> usize {
+    cell_bit_bytes(dims) + CELL_BOX_BYTES
+}
+
+/// The bitmap's part of [`visible_cell_bytes`].
+const fn cell_bit_bytes(dims: [u16; 3]) -> usize {
     (dims[0] as usize * dims[1] as usize * dims[2] as usize).div_ceil(8)
 }
+
+/// The box's part of [`visible_cell_bytes`].
+const CELL_BOX_BYTES: usize = 12;
 
 /// Bricks of `2^shift` cells along an axis of `d` voxels.
 const fn bricks_along(d: u16, shift: u32) -> usize {
@@ -259,6 +269,8 @@ impl<'a> Volume<'a> {
             .ok_or(Error::BufferTooSmall)?;
         out.fill(0);
         let [w, h, d] = self.dims.map(|v| v as usize);
+        // The box of the set bits: lowest and highest an axis.
+        let (mut lo, mut hi) = (self.dims, [0u16; 3]);
         // Each row of cells: the corners' range along x from two voxel
         // rows of each of two layers, folded pairwise.
         for z in 0..d {
@@ -289,15 +301,49 @@ impl<'a> Volume<'a> {
                     if visible {
                         let i = self.index(x, y, z);
                         out[i >> 3] |= 1 << (i & 7);
+                        for (a, v) in [x, y, z].into_iter().enumerate() {
+                            (lo[a], hi[a]) = (lo[a].min(v as u16), hi[a].max(v as u16));
+                        }
                     }
                 }
             }
         }
+        let n = cell_bit_bytes(self.dims);
+        for (k, v) in lo.into_iter().chain(hi).enumerate() {
+            out[n + 2 * k..n + 2 * k + 2].copy_from_slice(&v.to_le_bytes());
+        }
         Ok(())
     }
 
+    /// The 16.16 box `[bot, top]` that holds every sample whose cell bit
+    /// ([`Volume::compute_visible_cells`]) is set — the whole volume
+    /// without bits. A sample outside it is clear: phase I's rows are
+    /// solved against it, and the samples around a volume's visible part
+    /// are never walked. Empty (`bot > top` on an axis) when no bit is
+    /// set.
+    pub(crate) fn visible_box(&self) -> [[i32; 3]; 2] {
+        let top = self.dims.map(|d| (d as i32 - 1) << 16);
+        let Some(b) = self
+            .visible
+            .and_then(|v| v.get(cell_bit_bytes(self.dims)..))
+            .and_then(|b| b.first_chunk::<CELL_BOX_BYTES>())
+        else {
+            return [[0; 3], top];
+        };
+        let at = |k: usize| u16::from_le_bytes([b[2 * k], b[2 * k + 1]]) as i32;
+        // A sample reads cell floor(t) (its bit repeats on the top face):
+        // lo <= floor(t) <= hi, with `lo` at most `dims` (then empty).
+        [
+            core::array::from_fn(|a| at(a).min(self.dims[a] as i32) << 16),
+            core::array::from_fn(|a| {
+                (at(3 + a).min(self.dims[a] as i32) << 16 | 0xffff).min(top[a])
+            }),
+        ]
+    }
+
     /// Skips samples in cells [`Volume::compute_visible_cells`] found
-    /// clear, reading its bits. [`Error::BadSize`] for another length.
+    /// clear, reading its bits, and walks none outside their box.
+    /// [`Error::BadSize`] for another length.
     pub fn with_visible_cells(mut self, bits: &'a [u8]) -> Result<Self, Error> {
         if bits.len() != visible_cell_bytes(self.dims) {
             return Err(Error::BadSize);
@@ -867,7 +913,8 @@ mod tests {
     /// A sample whose cell bit is clear is transparent: at random points
     /// and on every face of random blob volumes, `visible(t)` is false only
     /// where the sampled density has zero weight; and the bits clear
-    /// something.
+    /// something. The bits' box is exactly the set bits' and every sample
+    /// outside it is clear; with no bit set it is empty.
     #[test]
     fn clear_cells_hold_only_transparent_samples() {
         use crate::format::Rgb;
@@ -893,6 +940,7 @@ mod tests {
             let mut bits = std::vec![0u8; visible_cell_bytes(dims)];
             plain.compute_visible_cells(&tf, &mut bits).unwrap();
             let vol = plain.with_visible_cells(&bits).unwrap();
+            let [bot, top] = vol.visible_box();
             for k in 0..4000 {
                 let t = point(dims, k, &mut next);
                 if !vol.cell_bits().visible(t) {
@@ -900,8 +948,36 @@ mod tests {
                     let (d, _) = vol.sample(t);
                     assert_eq!(tf.weight(d), 0, "{dims:?} {t:?}");
                 }
+                // Outside the box: clear.
+                if (0..3).any(|a| t[a] < bot[a] || t[a] > top[a]) {
+                    assert!(!vol.cell_bits().visible(t), "{dims:?} {t:?}");
+                }
+            }
+            // The box is the set bits' box, by a direct scan.
+            let (mut lo, mut hi) = ([i32::MAX; 3], [i32::MIN; 3]);
+            let [w, h, _] = dims.map(|d| d as usize);
+            for i in 0..len {
+                if bits[i >> 3] >> (i & 7) & 1 != 0 {
+                    let p = [i % w, i / w % h, i / (w * h)].map(|v| v as i32);
+                    lo = core::array::from_fn(|a| lo[a].min(p[a]));
+                    hi = core::array::from_fn(|a| hi[a].max(p[a]));
+                }
+            }
+            if lo[0] <= hi[0] {
+                assert_eq!(bot, lo.map(|v| v << 16), "{dims:?}");
+                let want = core::array::from_fn(|a| {
+                    (hi[a] << 16 | 0xffff).min((dims[a] as i32 - 1) << 16)
+                });
+                assert_eq!(top, want, "{dims:?}");
             }
         }
         assert!(clear > 1000, "{clear}");
+        // Nothing visible: an empty box.
+        let d = [0u8; 27];
+        let plain = Volume::new(&d, [3; 3]).unwrap();
+        let mut bits = [0xffu8; visible_cell_bytes([3; 3])];
+        plain.compute_visible_cells(&tf, &mut bits).unwrap();
+        let [bot, top] = plain.with_visible_cells(&bits).unwrap().visible_box();
+        assert!((0..3).all(|a| bot[a] > top[a]), "{bot:?} {top:?}");
     }
 }

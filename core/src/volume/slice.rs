@@ -41,22 +41,36 @@ pub struct Slice {
 impl Slice {
     /// The covered pixels of row `py` inside `[lo, hi)` and the voxel
     /// coordinate at the first: `(x0, x1, t)`, `x0 >= x1` when none.
-    /// Solved exactly from the six half-planes `0 <= t_i <= hi_i`, in
+    /// Solved exactly from the six half-planes `bot_i <= t_i <= top_i`
+    /// (the volume's box, or the box of its visible cells), in
     /// `i32` when the slice's numbers are small enough for every step to
     /// fit ([`Slice::narrow`]; a 32-bit division, one instruction with a
     /// divider), else in `i64`: the same span either way.
     #[inline]
-    pub(crate) fn row(&self, py: i32, lo: i32, hi: i32, top: [i32; 3]) -> (i32, i32, [i32; 3]) {
+    pub(crate) fn row(
+        &self,
+        py: i32,
+        lo: i32,
+        hi: i32,
+        [bot, top]: [[i32; 3]; 2],
+    ) -> (i32, i32, [i32; 3]) {
         if self.narrow {
-            self.solve::<i32>(py, lo, hi, top)
+            self.solve::<i32>(py, lo, hi, bot, top)
         } else {
-            self.solve::<i64>(py, lo, hi, top)
+            self.solve::<i64>(py, lo, hi, bot, top)
         }
     }
 
     /// [`Slice::row`] in `T`.
     #[inline(always)]
-    fn solve<T: RowInt>(&self, py: i32, lo: i32, hi: i32, top: [i32; 3]) -> (i32, i32, [i32; 3]) {
+    fn solve<T: RowInt>(
+        &self,
+        py: i32,
+        lo: i32,
+        hi: i32,
+        bot: [i32; 3],
+        top: [i32; 3],
+    ) -> (i32, i32, [i32; 3]) {
         let ax = self.bounds.x;
         let dy = T::from(py - self.bounds.y);
         // Columns relative to the anchor: k = px - ax.
@@ -67,18 +81,19 @@ impl Slice {
             // t_i(k) = b + tx k.
             let b = T::from(self.t0[i]) + T::from(self.ty[i]) * dy;
             base[i] = b;
-            let (tx, top) = (T::from(self.tx[i]), T::from(top[i]));
+            let (tx, bot, top) = (T::from(self.tx[i]), T::from(bot[i]), T::from(top[i]));
             if tx == zero {
-                if b < zero || b > top {
+                if b < bot || b > top {
                     return (0, 0, [0; 3]);
                 }
                 continue;
             }
-            // With d = |tx|: 0 <= b + tx k <= top holds from
-            // k = -floor(b / d) (tx > 0) or -floor((top - b) / d) (tx < 0)
-            // up to floor((top - b) / d), respectively floor(b / d).
+            // With d = |tx|: bot <= b + tx k <= top holds from
+            // k = -floor((b - bot) / d) (tx > 0) or -floor((top - b) / d)
+            // (tx < 0) up to floor((top - b) / d), respectively
+            // floor((b - bot) / d).
             let d = if tx > zero { tx } else { zero - tx };
-            let (under, over) = (b.div_floor(d), (top - b).div_floor(d));
+            let (under, over) = ((b - bot).div_floor(d), (top - b).div_floor(d));
             let (from, to) = if tx > zero {
                 (zero - under, over)
             } else {
@@ -391,6 +406,8 @@ mod tests {
                 tx[k % 3] = 0;
             }
             let top = [9 << 16, 31 << 16, 1023 << 16];
+            // The whole box, or a box of visible cells inside it.
+            let bot = [[0; 3], [1 << 16, 0, 7 << 16]][k % 2];
             let mut s = Slice {
                 z: 0,
                 bounds,
@@ -405,9 +422,9 @@ mod tests {
             tried += 1;
             for py in bounds.y..bounds.y + bounds.h as i32 {
                 let (lo, hi) = (bounds.x, bounds.x + bounds.w as i32);
-                let got = s.row(py, lo, hi, top);
+                let got = s.row(py, lo, hi, [bot, top]);
                 s.narrow = false;
-                let want = s.row(py, lo, hi, top);
+                let want = s.row(py, lo, hi, [bot, top]);
                 s.narrow = true;
                 if want.0 < want.1 {
                     assert_eq!(got, want, "{s:?} row {py}");
