@@ -635,8 +635,10 @@ fn firmware_output_is_bit_identical_to_the_host() {
                 assert_eq!(skipping.crc, host[0].crc, "skipping changed the frame");
                 assert!(skipping.stats.skipped > skipping.stats.samples / 4);
             }
-            // The cells, finer than the bricks, skip more.
-            assert!(host[3].stats.skipped > host[2].stats.skipped);
+            // The cells, finer than the bricks, skip more (counting the
+            // samples outside their box, never walked).
+            let unwalked = host[0].stats.samples - host[3].stats.samples;
+            assert!(host[3].stats.skipped + unwalked > host[2].stats.skipped);
             assert!(full_volume, "{board}: the full build has no volume code?");
             assert!(
                 !min_volume,

@@ -128,8 +128,8 @@ proptest! {
     /// Empty-space skipping changes no byte: random volumes, rotations,
     /// transfer thresholds, brick sides, by bricks or by cells, and both
     /// compositing modes give the same image, depth and counts with and
-    /// without it, and only the skipped samples (never a blended one) go
-    /// unfetched.
+    /// without it (the cells walk no more samples), and only the skipped
+    /// samples (never a blended one) go unfetched.
     #[test]
     fn skipping_empty_bricks_changes_nothing(
         seed in 0u64..1000,
@@ -155,7 +155,12 @@ proptest! {
         let (b, tb) = render(&c, &[], &vs, off, &lights).unwrap();
         prop_assert_eq!(&a.raw, &b.raw);
         prop_assert_eq!(&a.depth, &b.depth);
-        prop_assert_eq!(ta.stats.samples, tb.stats.samples);
+        if by_cells {
+            // The cells' box: the samples around it are not walked.
+            prop_assert!(ta.stats.samples <= tb.stats.samples);
+        } else {
+            prop_assert_eq!(ta.stats.samples, tb.stats.samples);
+        }
         prop_assert_eq!(ta.stats.composited, tb.stats.composited);
         prop_assert_eq!(tb.stats.skipped, 0);
         prop_assert!(ta.stats.skipped + ta.stats.composited <= ta.stats.samples);
