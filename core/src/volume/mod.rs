@@ -692,6 +692,13 @@ mod tests {
     use crate::prelude::*;
     use std::vec;
 
+    /// The procedural sphere, `side` voxels a side.
+    fn sphere_of(side: u16) -> std::vec::Vec<u8> {
+        let mut d = vec![0u8; (side as usize).pow(3)];
+        sphere(side, &mut d).unwrap();
+        d
+    }
+
     /// Skipping bricks or cells the transfer function makes transparent
     /// changes no cell: the same plane with and without bricks, for every
     /// brick side, and with the cells' bits,
@@ -701,8 +708,7 @@ mod tests {
     fn brick_skipping_changes_nothing() {
         const SIDE: u16 = 20;
         let n = SIDE as usize;
-        let mut sphere_d = vec![0u8; n * n * n];
-        sphere(SIDE, &mut sphere_d).unwrap();
+        let sphere_d = sphere_of(SIDE);
         let mut next = crate::numeric::xorshift(7);
         // Noise in blobs: mostly clear, some dense clusters.
         let noise: std::vec::Vec<u8> = (0..n * n * n)
@@ -791,9 +797,7 @@ mod tests {
     #[test]
     fn depth_test_left_out_only_where_nothing_is_nearer() {
         const SIDE: u16 = 20;
-        let n = SIDE as usize;
-        let mut d = vec![0u8; n * n * n];
-        sphere(SIDE, &mut d).unwrap();
+        let d = sphere_of(SIDE);
         let tf = Transfer::from_points(&[
             TfPoint::new(90, 0, Rgb::new(255, 120, 60)),
             TfPoint::new(230, 200, Rgb::new(255, 255, 255)),
