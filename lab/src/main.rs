@@ -113,6 +113,9 @@ enum Cmd {
         /// Frames of the camera path.
         #[arg(long, default_value_t = 200)]
         frames: u32,
+        /// Walks of the path per row: each frame's time is its fastest.
+        #[arg(long, default_value_t = 3)]
+        runs: usize,
         /// Markdown output.
         #[arg(short, long, default_value = "reports/cull.md")]
         output: PathBuf,
@@ -222,15 +225,17 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
         }
         Cmd::CullReport {
             frames,
+            runs,
             output,
             chart,
             image,
         } => {
             use tilerast_lab::cull;
-            let rows = cull::run(frames.max(2))?;
+            let timing = cull::Timing { runs: runs.max(1) };
+            let rows = cull::run(frames.max(2), timing)?;
             cull::chart(&rows)?.save_png(&chart)?;
             cull::pictures(frames.max(2))?.save_png(&image)?;
-            let md = cull::report(&rows, &chart, &image);
+            let md = cull::report(&rows, timing, &chart, &image);
             std::fs::write(&output, &md).map_err(|e| format!("{}: {e}", output.display()))?;
             print!("{md}");
         }
