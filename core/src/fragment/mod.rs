@@ -259,6 +259,50 @@ mod planes {
         fn pass(&self, i: usize, id: u8) -> bool;
     }
 
+    /// [`DepthPlane::farther_min_max`] of `cells` holding depth with
+    /// `FRAC` fraction bits, a cell at a time: what a microcontroller runs
+    /// (eight at a time cost the Cortex-M4 city's S&W and CHC walks 6% and
+    /// 3% more instructions, the single pass 0.2% less: measured).
+    pub(crate) fn farther_min_max_each<T: Cell, const FRAC: u32>(
+        cells: &[T],
+        z: u16,
+    ) -> (u32, u16, u16) {
+        cells.iter().fold((0, u16::MAX, 0), |(n, lo, hi), c| {
+            let d = (c.to_u32() >> FRAC) as u16;
+            (n + (z < d) as u32, lo.min(d), hi.max(d))
+        })
+    }
+
+    /// [`farther_min_max_each`] eight cells at a time, what a host runs:
+    /// each depth biased to `i16` (`d ^ 0x8000`, the same order), so the
+    /// compares, minima and maxima of eight are independent lanes that
+    /// x86-64's baseline SIMD takes whole (SSE2 has signed 16-bit minima,
+    /// not unsigned ones). The single pass on the host's culling city, two
+    /// 60-frame walks: 519 -> 500 M instructions (large triangles),
+    /// 797 -> 780 M (small), callgrind.
+    pub(crate) fn farther_min_max_lanes<T: Cell, const FRAC: u32>(
+        cells: &[T],
+        z: u16,
+    ) -> (u32, u16, u16) {
+        let bias = |d: u16| (d ^ 0x8000) as i16;
+        let at = |c: &T| bias((c.to_u32() >> FRAC) as u16);
+        let zb = bias(z);
+        let mut chunks = cells.chunks_exact(8);
+        let (mut n, mut lo, mut hi) = (0u32, i16::MAX, i16::MIN);
+        for ch in &mut chunks {
+            let v: [i16; 8] = core::array::from_fn(|k| at(&ch[k]));
+            n += v.iter().map(|&d| (zb < d) as u32).sum::<u32>();
+            lo = v.iter().fold(lo, |m, &d| m.min(d));
+            hi = v.iter().fold(hi, |m, &d| m.max(d));
+        }
+        for c in chunks.remainder() {
+            let d = at(c);
+            (n, lo, hi) = (n + (zb < d) as u32, lo.min(d), hi.max(d));
+        }
+        let unbias = |d: i16| d as u16 ^ 0x8000;
+        (n, unbias(lo), unbias(hi))
+    }
+
     /// Storage of a [`DepthBits`] plane: depth in 16.`FRAC` in cells `T`.
     pub struct ZPlane<T, const FRAC: u32, const N: usize>(Plane<T, N>);
 
@@ -338,12 +382,12 @@ mod planes {
             n
         }
         fn farther_min_max(&self, r: core::ops::Range<usize>, z: u16) -> (u32, u16, u16) {
-            self.0 .0.as_flattened()[r]
-                .iter()
-                .fold((0, u16::MAX, 0), |(n, lo, hi), c| {
-                    let d = (c.to_u32() >> FRAC) as u16;
-                    (n + (z < d) as u32, lo.min(d), hi.max(d))
-                })
+            let cells = &self.0 .0.as_flattened()[r];
+            if crate::numeric::MCU32 {
+                farther_min_max_each::<T, FRAC>(cells, z)
+            } else {
+                farther_min_max_lanes::<T, FRAC>(cells, z)
+            }
         }
         #[inline(always)]
         fn test_and_set(&mut self, i: usize, z: i32) -> bool {
@@ -583,5 +627,40 @@ mod tests {
         check::<ZPlane<u16, 0, 1>>(0);
         check::<ZPlane<[u8; 3], 8, 1>>(8);
         check::<ZPlane<u32, 14, 1>>(14);
+    }
+
+    /// The refresh's two forms (a cell at a time on a microcontroller,
+    /// eight at a time on a host) agree on random runs of every length up
+    /// to 40 and every depth at a run's extremes, 0 and 65535 included.
+    #[test]
+    fn refresh_scans_agree() {
+        use super::planes::{farther_min_max_each, farther_min_max_lanes};
+        use crate::numeric::xorshift;
+        let mut next = xorshift(0x2545_f491);
+        for len in 0..=40usize {
+            for round in 0..50 {
+                let cells: [u16; 40] = core::array::from_fn(|_| match round % 3 {
+                    // Every value, the extremes, a narrow band.
+                    0 => next() as u16,
+                    1 => [0, 1, 0x7fff, 0x8000, 0xfffe, 0xffff][next() as usize % 6],
+                    _ => 0x8000 + (next() % 5) as u16 - 2,
+                });
+                let cells = &cells[..len];
+                let zs = [0, 1, 0x7fff, 0x8000, 0xffff, next() as u16];
+                for z in zs.into_iter().chain(cells.iter().copied()) {
+                    assert_eq!(
+                        farther_min_max_lanes::<u16, 0>(cells, z),
+                        farther_min_max_each::<u16, 0>(cells, z),
+                        "{cells:?} {z}"
+                    );
+                }
+                let wide: [u32; 40] = core::array::from_fn(|k| (next() as u32) >> 2);
+                let z = next() as u16;
+                assert_eq!(
+                    farther_min_max_lanes::<u32, 14>(&wide[..len], z),
+                    farther_min_max_each::<u32, 14>(&wide[..len], z)
+                );
+            }
+        }
     }
 }
