@@ -654,7 +654,7 @@ mod tests {
                         "{cells:?} {z}"
                     );
                 }
-                let wide: [u32; 40] = core::array::from_fn(|k| (next() as u32) >> 2);
+                let wide: [u32; 40] = core::array::from_fn(|_| (next() as u32) >> 2);
                 let z = next() as u16;
                 assert_eq!(
                     farther_min_max_lanes::<u32, 14>(&wide[..len], z),
