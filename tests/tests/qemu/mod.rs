@@ -66,13 +66,14 @@ fn build_in(
     profile: bool,
 ) -> PathBuf {
     let dir = repo().join("targets").join(board);
+    let (_lock, fixed) = fixed_checkout();
+    let manifest = fixed.join("targets").join(board).join("Cargo.toml");
     let mut cmd = Process::new(cargo());
-    cmd.current_dir(&dir).env("TILERAST_SCENES", scenes).args([
-        "build",
-        "--profile",
-        cargo_profile,
-        "--quiet",
-    ]);
+    cmd.current_dir(&dir)
+        .env("TILERAST_SCENES", scenes)
+        .args(["build", "--profile", cargo_profile, "--quiet"])
+        .arg("--manifest-path")
+        .arg(&manifest);
     if let Some(t) = triple {
         cmd.args(["--target", t]);
     }
@@ -100,6 +101,38 @@ fn build_in(
         .join(triple)
         .join(cargo_profile)
         .join(format!("tilerast-{board}"))
+}
+
+/// The checkout seen through one fixed path, and the lock that keeps it
+/// there while a build runs.
+///
+/// Why: a board's firmware is its own Cargo workspace, and the core it
+/// depends on (`../../core`) lies outside it. Cargo hashes such a path
+/// dependency's *absolute* path into its symbol names (`-C metadata`), and
+/// LTO's inlining follows the names: the same sources built in two
+/// checkouts gave the M4's alpha-blended rectangle 5,096 and 5,557 ticks.
+/// Built through one path, every checkout gives the same code, byte for
+/// byte, so the reports' instruction counts do not depend on where the
+/// repository was cloned. The path is a symbolic link in the temporary
+/// folder, pointed at this checkout under an exclusive lock (held until the
+/// returned file drops), so two checkouts building at once take turns.
+pub fn fixed_checkout() -> (std::fs::File, PathBuf) {
+    let tmp = std::env::temp_dir();
+    let lock = std::fs::File::create(tmp.join("tilerast-src.lock")).expect("lock file");
+    lock.lock().expect("locking tilerast-src.lock");
+    let here = repo().canonicalize().expect("the checkout");
+    #[cfg(unix)]
+    {
+        let link = tmp.join("tilerast-src");
+        if std::fs::read_link(&link).ok().as_deref() != Some(here.as_path()) {
+            let _ = std::fs::remove_file(&link);
+            std::os::unix::fs::symlink(&here, &link).expect("linking the fixed path");
+        }
+        (lock, link)
+    }
+    // Elsewhere the checkout's own path: counts may then depend on it.
+    #[cfg(not(unix))]
+    (lock, here)
 }
 
 /// The first value of `key` (say `target = `) in a board's
