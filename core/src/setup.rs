@@ -31,8 +31,8 @@ use crate::format::{Lanes, PixelFormat};
 use crate::geom::Rect;
 use crate::geom::{QuadVertex, SubBox, Vertex};
 use crate::numeric::{
-    dot2_i16, pairs, wide_mul_i, wrapping_mul_i32, Divisor, LONG_MUL, SUBPIXEL, SUBPIXEL_BITS,
-    W_FRAC, Z_FRAC,
+    dot2_i16, pairs, wide_mul, wide_mul_i, wrapping_mul_i32, Divisor, LONG_MUL, SUBPIXEL,
+    SUBPIXEL_BITS, W_FRAC, Z_FRAC,
 };
 
 /// One edge as a function of pixel indices: `E(px, py) = a px + b0 + step py`.
@@ -724,15 +724,39 @@ impl SetupFloat for f64 {
 /// output unit: 0.06 LSB at `k = 128`, 0.25 at `k = 256`.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct QuadPlane<L> {
-    /// Column whose rows restart exactly (the anchor's) and the origin row.
+    /// Column whose rows restart exactly (the anchor's) and the origin
+    /// row: the triangle box's top, above every row drawn.
     x: i64,
     oy: i64,
-    /// Per channel, the row polynomials in `j = py - oy` at column `x`
-    /// (output scale, 32 fraction bits, modulo 2^64): value
-    /// `r[0] + j (r[1] + j r[2])`, first difference `r[3] + j r[4]`.
+    /// Per channel, the row polynomials in `j = py - oy >= 0` at column
+    /// `x` (output scale, 32 fraction bits, modulo 2^64): value
+    /// `r[0] + j (r[1] + j r[2])`, first difference `r[3] + j r[4]`, each
+    /// with the bias that rounds it to 16 fraction bits added.
     r: [[i64; 5]; 3],
     /// Second difference per pixel (output scale, 16 fraction bits).
     pub ddc: L,
+}
+
+/// Row polynomials `r` in `j` (value `r[0] + j (r[1] + j r[2])`, first
+/// difference `r[3] + j r[4]`, 32 fraction bits) re-expanded about row
+/// `dj` (`j = j' + dj`), so that every row drawn has `j' >= 0` when `dj`
+/// is the box's top (one `umull` and one `mla` a product in
+/// [`QuadPlane::at`], not a 64x64-bit one), with the bias that rounds to
+/// 16 fraction bits folded into both values and `bias` (16 fraction bits)
+/// into the value: the same numbers modulo 2^64.
+fn reanchor([r0, r1, r2, r3, r4]: [i64; 5], dj: i64, bias: i32) -> [i64; 5] {
+    let (wr, wm) = (i64::wrapping_add, i64::wrapping_mul);
+    let half = 1 << 15;
+    [
+        wr(
+            wr(r0, half + ((bias as i64) << 16)),
+            wm(dj, wr(r1, wm(dj, r2))),
+        ),
+        wr(r1, wm(wm(r2, 2), dj)),
+        r2,
+        wr(wr(r3, half), wm(dj, r4)),
+        r4,
+    ]
 }
 
 impl<L: Lanes> QuadPlane<L> {
@@ -748,13 +772,17 @@ impl<L: Lanes> QuadPlane<L> {
 
     /// The planes of `v`, set up as `t` in the precision it needs
     /// ([`SLIVER`]); `None` for a sliver.
+    /// `bias` (output scale, 16 fraction bits) is added to every colour
+    /// [`Self::at`] returns: the opaque span's rounding bias, folded into
+    /// the planes once instead of added a span.
     pub fn new<F: PixelFormat<Lanes = L>, T: EdgeInt>(
         v: &[QuadVertex; 3],
         t: &TriangleSetup<L, T>,
+        bias: i32,
     ) -> Option<Self> {
         match setup_precision(v)? {
-            false => Some(Self::set_up::<F, T, f32>(v, t)),
-            true => Some(Self::set_up::<F, T, f64>(v, t)),
+            false => Some(Self::set_up::<F, T, f32>(v, t, bias)),
+            true => Some(Self::set_up::<F, T, f64>(v, t, bias)),
         }
     }
 
@@ -762,6 +790,7 @@ impl<L: Lanes> QuadPlane<L> {
     fn set_up<F: PixelFormat<Lanes = L>, T: EdgeInt, R: SetupFloat>(
         v: &[QuadVertex; 3],
         t: &TriangleSetup<L, T>,
+        bias: i32,
     ) -> Self {
         // Setup order: vertex k is opposite edge e[k].
         let (i1, i2) = if t.swapped { (2, 1) } else { (1, 2) };
@@ -818,6 +847,7 @@ impl<L: Lanes> QuadPlane<L> {
         let mut r = [[0i64; 5]; 3];
         let mut dd = [0i32; 3];
         let i = ax - ox;
+        let dj = ay - oy;
         for l in 0..L::LEN {
             let mut q = [R::ZERO; 6];
             for (n, qn) in q.iter_mut().enumerate() {
@@ -838,18 +868,19 @@ impl<L: Lanes> QuadPlane<L> {
             // At column x = ax (i = ax - ox), as polynomials in j.
             let wr = i64::wrapping_add;
             let wm = i64::wrapping_mul;
-            r[l] = [
+            let [r0, r1, r2, r3, r4] = [
                 wr(q00, wm(i, wr(q10, wm(q20, i)))),
                 wr(q01, wm(q11, i)),
                 q02,
                 wr(q10, wm(q20, 2 * i + 1)),
                 q11,
             ];
+            r[l] = reanchor([r0, r1, r2, r3, r4], dj, bias);
             dd[l] = (wm(q20, 2).wrapping_add(1 << 15) >> 16) as i32;
         }
         QuadPlane {
             x: ax,
-            oy,
+            oy: ay,
             r,
             ddc: L::from_fn(|l| dd[l]),
         }
@@ -861,15 +892,23 @@ impl<L: Lanes> QuadPlane<L> {
     /// (`i32`, exact modulo 2^32, like `k` additions).
     #[inline(always)]
     pub fn at(&self, x0: i64, py: i64) -> (L, L) {
-        let j = py - self.oy;
+        // `0 <= j < 2^32`: rows lie in the box, whose top is `oy`.
+        let j = (py - self.oy) as u32;
         let k = (x0 - self.x) as i32;
         let steps = pairs(k);
-        let round = |v: i64| (v.wrapping_add(1 << 15) >> 16) as i32;
+        // The bias is in `r`: rounding is the shift alone.
+        let round = |v: u64| (v >> 16) as i32;
         let mut c = [(0, 0); 3];
         for (l, out) in c.iter_mut().enumerate().take(L::LEN) {
-            let r = &self.r[l];
-            let q = r[0].wrapping_add(j.wrapping_mul(r[1].wrapping_add(j.wrapping_mul(r[2]))));
-            let d = r[3].wrapping_add(j.wrapping_mul(r[4]));
+            let r = self.r[l].map(|v| v as u64);
+            // `j r` modulo 2^64 for a 32-bit `j`: one long product and one
+            // 32-bit one (on the Cortex-M0 four 16-bit products, not the
+            // library's 64x64-bit multiply).
+            let mul = |r: u64| {
+                wide_mul(j, r as u32).wrapping_add((j.wrapping_mul((r >> 32) as u32) as u64) << 32)
+            };
+            let q = r[0].wrapping_add(mul(r[1].wrapping_add(mul(r[2]))));
+            let d = r[3].wrapping_add(mul(r[4]));
             let (q, d, dd) = (round(q), round(d), self.ddc.lane(l));
             *out = (
                 q.wrapping_add(k.wrapping_mul(d))
@@ -883,7 +922,63 @@ impl<L: Lanes> QuadPlane<L> {
 
 #[cfg(test)]
 mod tests {
-    use super::{alpha_weight, f32_to_i64, SetupFloat};
+    use super::{alpha_weight, f32_to_i64, reanchor, QuadPlane, SetupFloat};
+
+    /// [`QuadPlane::at`] on planes re-anchored at the box's top equals the
+    /// rounded closed form about the original origin row (plus the bias),
+    /// for random coefficients (small ones, as real triangles have, and
+    /// any 64-bit ones, whose products wrap), origins and rows.
+    #[test]
+    fn reanchored_rows_equal_the_closed_form() {
+        let mut next = crate::numeric::xorshift(11);
+        for plane in 0..2000 {
+            let mut coef = || {
+                let v = next() as i64;
+                if plane % 2 == 0 {
+                    v >> 20
+                } else {
+                    v
+                }
+            };
+            let r: [[i64; 5]; 3] = core::array::from_fn(|_| core::array::from_fn(|_| coef()));
+            let ddc: [i32; 3] = core::array::from_fn(|_| coef() as i32 >> 8);
+            let bias = (next() % 3) as i32 * (1 << 15);
+            let x = (next() % 300) as i64 - 50;
+            // The origin row (vertex 0's) at or below the box's top.
+            let top = (next() % 400) as i64 - 100;
+            let oy = top + (next() % 64) as i64;
+            let q = QuadPlane {
+                x,
+                oy: top,
+                r: r.map(|r| reanchor(r, top - oy, bias)),
+                ddc,
+            };
+            let round = |v: i64| (v.wrapping_add(1 << 15) >> 16) as i32;
+            for _ in 0..20 {
+                let (x0, py) = (x + (next() % 240) as i64, top + (next() % 240) as i64);
+                let (j, k) = (py - oy, (x0 - x) as i32);
+                let steps = crate::numeric::pairs(k);
+                let want: [(i32, i32); 3] = core::array::from_fn(|l| {
+                    let r = r[l];
+                    let v =
+                        r[0].wrapping_add(j.wrapping_mul(r[1].wrapping_add(j.wrapping_mul(r[2]))));
+                    let (v, d) = (round(v), round(r[3].wrapping_add(j.wrapping_mul(r[4]))));
+                    (
+                        v.wrapping_add(k.wrapping_mul(d))
+                            .wrapping_add(steps.wrapping_mul(ddc[l]))
+                            .wrapping_add(bias),
+                        d.wrapping_add(k.wrapping_mul(ddc[l])),
+                    )
+                });
+                let (c, dc) = q.at(x0, py);
+                assert_eq!(
+                    (c, dc),
+                    (want.map(|w| w.0), want.map(|w| w.1)),
+                    "plane {plane}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn f32_conversions_are_the_language_casts() {

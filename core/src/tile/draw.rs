@@ -451,7 +451,14 @@ where
         t: &mut TriangleSetup<F::Lanes, T>,
         st: &State,
     ) {
-        match S::QUADRATIC.then(|| QuadPlane::new::<F, T>(q, t)) {
+        // The opaque span's rounding bias rides in the planes (a
+        // translucent span rounds in its blend instead).
+        let bias = if B::ALPHA && st.blend.translucent() {
+            0
+        } else {
+            self.dither.round_bias()
+        };
+        match S::QUADRATIC.then(|| QuadPlane::new::<F, T>(q, t, bias)) {
             Some(Some(p)) => self.triangle_shaded::<T, true, false>(t, v, &p, st),
             _ => self.triangle::<T, false>(t, v, st),
         }
@@ -916,9 +923,35 @@ where
             // micro:bit's large Gouraud + Z workload 77.0 -> 60.3
             // instructions a pixel, the per-span test included: measured).
             self.span_pixels::<MODE, MASKED, false>(idx..end, x, y, st, steps, wid, mask);
+        } else if MODE & QUAD_STEP != 0 {
+            self.span_pixels_apart::<MODE, MASKED>(idx..end, x, y, st, steps, wid, mask);
         } else {
             self.span_pixels::<MODE, MASKED, true>(idx..end, x, y, st, steps, wid, mask);
         }
+    }
+
+    /// [`Self::span_pixels`] with its clamps, out of line: a quadratic
+    /// span steps three more values a pixel (`dc += ddc`), which do not
+    /// fit the registers the row loop around it leaves (the M4 spilled
+    /// 7.5 of its 27 instructions a pixel to the stack, inlined); a call
+    /// a span saves the row loop's registers once instead. Inlined on the
+    /// Cortex-M0 (`eabi`: soft float), whose loop spills either way and
+    /// pays for the call (its fast-Phong workload 12,861 -> 13,152 ticks
+    /// out of line: measured).
+    #[cfg_attr(target_abi = "eabi", inline(always))]
+    #[cfg_attr(not(target_abi = "eabi"), inline(never))]
+    #[allow(clippy::too_many_arguments)]
+    fn span_pixels_apart<const MODE: u8, const MASKED: bool>(
+        &mut self,
+        range: Range<usize>,
+        x: u32,
+        y: u32,
+        st: SpanState<F::Lanes>,
+        steps: (i32, i32),
+        wid: u8,
+        mask: u32,
+    ) {
+        self.span_pixels::<MODE, MASKED, true>(range, x, y, st, steps, wid, mask);
     }
 
     /// Whether a translucent span of `MODE` steps its colour scaled:
@@ -1150,7 +1183,8 @@ where
         let idx = self.offset(x, y);
         let bias = self.dither.round_bias();
         let s = SpanStart {
-            c: s.c.map(|v| v + bias),
+            // A quadratic span's colour has it already ([`QuadPlane::new`]).
+            c: if QUAD { s.c } else { s.c.map(|v| v + bias) },
             z: s.z + (1 << (Z_FRAC - 1)),
             ..s
         };
