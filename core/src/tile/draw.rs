@@ -924,7 +924,7 @@ where
             // instructions a pixel, the per-span test included: measured).
             self.span_pixels::<MODE, MASKED, false>(idx..end, x, y, st, steps, wid, mask);
         } else if MODE & QUAD_STEP != 0 {
-            self.span_pixels_apart::<MODE, MASKED>(idx..end, x, y, st, steps, wid, mask);
+            self.span_pixels_apart::<MODE, MASKED>(idx..end, (x, y), st, steps, (wid, mask));
         } else {
             self.span_pixels::<MODE, MASKED, true>(idx..end, x, y, st, steps, wid, mask);
         }
@@ -940,16 +940,13 @@ where
     /// out of line: measured).
     #[cfg_attr(target_abi = "eabi", inline(always))]
     #[cfg_attr(not(target_abi = "eabi"), inline(never))]
-    #[allow(clippy::too_many_arguments)]
     fn span_pixels_apart<const MODE: u8, const MASKED: bool>(
         &mut self,
         range: Range<usize>,
-        x: u32,
-        y: u32,
+        (x, y): (u32, u32),
         st: SpanState<F::Lanes>,
         steps: (i32, i32),
-        wid: u8,
-        mask: u32,
+        (wid, mask): (u8, u32),
     ) {
         self.span_pixels::<MODE, MASKED, true>(range, x, y, st, steps, wid, mask);
     }
