@@ -772,6 +772,7 @@ impl<L: Lanes> QuadPlane<L> {
 
     /// The planes of `v`, set up as `t` in the precision it needs
     /// ([`SLIVER`]); `None` for a sliver.
+    ///
     /// `bias` (output scale, 16 fraction bits) is added to every colour
     /// [`Self::at`] returns: the opaque span's rounding bias, folded into
     /// the planes once instead of added a span.
