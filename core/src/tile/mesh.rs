@@ -14,8 +14,9 @@
 //!    top-left rule), relative to the clipped box's first pixel centre;
 //! 3. each row's covered run `[xl, xr)` straight from the edges: one floor
 //!    division per edge with a slope (a divide instruction on every chip
-//!    but the Cortex-M0, which scans a narrow box's row instead: a few
-//!    additions a column); exactly the pixels the traversal
+//!    but the Cortex-M0, which scans the rows of a box at most
+//!    [`SCAN_WIDTH`] columns wide, a few additions a column, and steps the
+//!    quotients of a wider one); exactly the pixels the traversal
 //!    (`crate::raster::traverse`) finds;
 //! 4. at the first covered row, and only then, the attribute planes: one
 //!    reciprocal of the doubled area and two 32x32-bit products a step
