@@ -698,6 +698,15 @@ impl BinPass {
                 let Some((x0, x1, y0, y1)) = b.and_then(|b| self.spans.span(&b)) else {
                     return;
                 };
+                if x0 == x1 && y0 == y1 {
+                    // One tile, no row or column loop: most of a mesh's
+                    // triangles (the M4 teapot's: 97%).
+                    let t = y0 * self.cols + x0;
+                    if (band_y0..=band_y1).contains(&y0) && (t0..t1).contains(&t) {
+                        push((t - t0) as usize, key);
+                    }
+                    return;
+                }
                 // Exclusive ranges: an inclusive one keeps an exhausted flag
                 // (the M4 teapot's binning: 45,000 instructions more, measured).
                 for ty in y0.max(band_y0)..y1.min(band_y1) + 1 {
