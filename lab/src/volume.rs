@@ -80,7 +80,9 @@ pub struct Row {
     pub color: (u8, f64),
 }
 
-fn config(side: u16) -> Config {
+/// The report's render configuration at a `side` x `side` viewport:
+/// RGB888, no dither, depth, tiles of up to 128 x 32.
+pub fn config(side: u16) -> Config {
     Config {
         width: side,
         height: side,
@@ -141,6 +143,22 @@ pub fn scene(data: VolumeData, tf: &str, mono: bool, slices: u16) -> Result<Volu
     };
     let transfer = tilerast_sim::volume::transfer(&spec.transfer)?;
     VolumeScene::new(data, transfer, spec).map_err(|e| e.to_string())
+}
+
+/// One normal-blending render of `vs` (quantised normals, skipping
+/// clear cells when `skip_empty`): the image and the phases' times.
+pub fn run_normal(
+    vs: &VolumeScene,
+    cfg: &Config,
+    skip_empty: bool,
+) -> Result<(Image, tilerast_sim::volume::VolumeTiming), String> {
+    run_once(
+        vs,
+        cfg,
+        ModeKind::Normal,
+        NormalsKind::Quantized,
+        skip_empty,
+    )
 }
 
 fn run_once(
