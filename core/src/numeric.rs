@@ -167,8 +167,15 @@ pub type FullPrecision = Bits<COLOR_FRAC, Z_FRAC>;
 /// change by 2 or more a pixel, keeps fewer fraction bits), or large with
 /// a box under 512 pixels of width plus height (so the steps' rounding,
 /// summed across the box, stays under 2^-4 of a depth unit) and no
-/// sliver. Others take the exact contract. The choice depends on the
-/// triangle alone, never on the tile. Translucent,
+/// sliver. A larger triangle that is no sliver — a side of 1024 pixels or
+/// more, or a wider box: the near-clipped ground or wall beside the
+/// camera — is a *far* triangle: its setup runs in 64 bits per 64-pixel
+/// block, and its planes are anchored once per 256-pixel cell of the
+/// screen at a pixel whose weights are exactly rounded, so a value is
+/// never more than 510 steps from its anchor (error under 2^-4 of a
+/// depth unit and 2^-7 of a colour unit; `tile::mesh`). Slivers beyond
+/// these take the exact contract. The choice depends on the
+/// triangle alone, never on the tile, and so do the cells. Translucent,
 /// quadratic, textured and antialiased triangles keep the exact contract.
 ///
 /// ```

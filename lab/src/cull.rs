@@ -159,6 +159,21 @@ fn walk<const SH: u32>(
     Ok((row, kept, walked.iter().map(|f| f.ns).collect()))
 }
 
+/// Every frame's time (ns) and the walk's counts, summed, of one walk of
+/// `place` in `mode` (threshold 0, 8x8 blocks): what `cull_cost` times.
+pub fn walk_times(
+    place: &Place,
+    frames: u32,
+    mode: CullMode,
+) -> Result<(Vec<f64>, CullStats), String> {
+    let walked = walk_once::<3>(place, frames, mode, 0)?.1;
+    let stats = walked.iter().fold(CullStats::default(), |mut s, f| {
+        s += f.stats;
+        s
+    });
+    Ok((walked.iter().map(|f| f.ns).collect(), stats))
+}
+
 /// Every frame's time of one more walk of `row`'s settings, ns.
 fn retime(place: &Place, row: &Row) -> Result<Vec<f64>, String> {
     let w = (place, row.frames, row.mode, row.threshold);
