@@ -712,9 +712,10 @@ impl<const N: usize, C: TileConfig> Tile<N, C> {
     }
 
     /// A far triangle's block's rows ([`Self::plane_rows`]), out of line:
-    /// the span loop's registers and stack apart from the far setup's
-    /// 64-bit and 128-bit values (on the Cortex-M0, 576 bytes of frame
-    /// instead of 824 with the rows inline).
+    /// the span loop's registers apart from the far setup's 64-bit and
+    /// 128-bit values. (The far setup's frame is 864 bytes on the
+    /// Cortex-M0; it is entered beside the 32-bit setup's, never on top
+    /// of it: [`Self::plane_triangle`].)
     #[inline(never)]
     #[allow(clippy::too_many_arguments)]
     fn far_rows(
