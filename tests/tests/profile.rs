@@ -5,7 +5,8 @@
 //! `tilerast_report_line` there). Each segment is one line's work; its
 //! addresses are charged to functions through the ELF's debug info, inlined
 //! frames included, so the span loop inlined into the frame loop still
-//! counts as the span loop.
+//! counts as the span loop. The fused mesh path's per-pair routine is also
+//! broken down by its source lines ([`STATEMENTS`]).
 //!
 //! The firmware also calls `tilerast_lap` as it reads SysTick, so the
 //! instructions between a line's first and last reading are those its
@@ -150,10 +151,16 @@ fn short(name: &str) -> String {
     name.replace("tilerast::", "")
 }
 
-/// The inline chain at each address, innermost first.
+/// An address's inline chain, innermost first: each frame's function, and
+/// the file and line in it where the address lies.
+type Frames = (Vec<String>, Vec<Option<(String, u32)>>);
+
+/// The inline chain at each address, innermost first: each frame's
+/// function and where in its source the address lies (the innermost
+/// frame's own line; an outer frame's call of the next one).
 struct Symbols {
     loader: addr2line::Loader,
-    cache: HashMap<u64, Vec<String>>,
+    cache: HashMap<u64, Frames>,
     /// [`core_modules`].
     modules: Vec<(String, bool)>,
 }
@@ -167,14 +174,18 @@ impl Symbols {
         }
     }
 
-    fn chain(&mut self, addr: u64) -> &[String] {
+    fn frames(&mut self, addr: u64) -> &Frames {
         let loader = &self.loader;
         self.cache.entry(addr).or_insert_with(|| {
-            let mut chain = vec![];
+            let (mut chain, mut at) = (vec![], vec![]);
             if let Ok(mut frames) = loader.find_frames(addr) {
                 while let Ok(Some(f)) = frames.next() {
                     if let Some(name) = f.function.as_ref().and_then(|n| n.demangle().ok()) {
                         chain.push(short(&name));
+                        at.push(
+                            f.location
+                                .and_then(|l| Some((l.file?.to_string(), l.line.unwrap_or(0)))),
+                        );
                     }
                 }
             }
@@ -185,9 +196,25 @@ impl Symbols {
                         .map(|s| short(&addr2line::demangle_auto(s.into(), None)))
                         .unwrap_or_else(|| format!("{addr:#x}")),
                 );
+                at.push(None);
             }
-            chain
+            (chain, at)
         })
+    }
+
+    fn chain(&mut self, addr: u64) -> &[String] {
+        &self.frames(addr).0
+    }
+
+    /// Where in function `f` (a name ending in `::f`) the address lies, if
+    /// `f` is on its chain: the file and line of `f`'s statement that
+    /// reaches it (line 0: code the compiler gave no line, such as
+    /// register moves and spills).
+    fn statement(&mut self, addr: u64, f: &str) -> Option<(String, u32)> {
+        let (chain, at) = self.frames(addr);
+        let tail = format!("::{f}");
+        let i = chain.iter().position(|n| n.ends_with(&tail))?;
+        at[i].clone()
     }
 }
 
@@ -357,7 +384,97 @@ fn section(board: &str, seg: &Segment, syms: &mut Symbols, per_tick: f64) -> Str
     for (f, n) in top(&incl, 14) {
         md += &format!("| `{f}` | {} | {} | {} |\n", fmt_n(n), pct(n), per(n));
     }
+    for f in STATEMENTS {
+        md += &statements(f, seg, syms, &pct, &per, u);
+    }
     md + "\n"
+}
+
+/// The functions whose statements a section breaks down, when the
+/// workload runs them: the fused mesh path's per-pair routine and its row
+/// loop (issue 46: where a pair's instructions go, statement by
+/// statement).
+const STATEMENTS: [&str; 2] = ["near_triangle", "plane_rows"];
+
+/// Function `f`'s statements in `seg`: each instruction charged to the
+/// line of `f` that reaches it (what that line inlines included), the
+/// most costly first, with the line's source text; empty when the
+/// workload does not run `f`.
+fn statements(
+    f: &str,
+    seg: &Segment,
+    syms: &mut Symbols,
+    pct: &dyn Fn(u64) -> String,
+    per: &dyn Fn(u64) -> String,
+    u: &str,
+) -> String {
+    let mut lines = BTreeMap::<(String, u32), u64>::new();
+    for (&a, &n) in &seg.counts {
+        if let Some(at) = syms.statement(a, f) {
+            *lines.entry(at).or_default() += n;
+        }
+    }
+    let all: u64 = lines.values().sum();
+    if all == 0 {
+        return String::new();
+    }
+    let mut rows: Vec<_> = lines.into_iter().collect();
+    rows.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+    let mut md = format!(
+        "\n`{f}`, statement by statement ({} instructions, {} of the workload's, {} a {u}): \
+         each instruction charged to the line of `{f}` that reaches it, what it inlines \
+         included.\n\n| line | source | instructions | share | per {u} |\n| --- | --- | ---: | ---: | ---: |\n",
+        fmt_n(all),
+        pct(all),
+        per(all),
+    );
+    let shown = 16;
+    for ((file, line), n) in rows.iter().take(shown) {
+        let name = file
+            .rsplit_once("core/src/")
+            .map_or(file.as_str(), |(_, r)| r);
+        let text = if *line == 0 {
+            "(no line: register moves, spills, branches the compiler made)".to_string()
+        } else {
+            source_line(file, *line)
+        };
+        md += &format!(
+            "| {name}:{line} | `{text}` | {} | {} | {} |\n",
+            fmt_n(*n),
+            pct(*n),
+            per(*n)
+        );
+    }
+    let rest: u64 = rows.iter().skip(shown).map(|r| r.1).sum();
+    if rest > 0 {
+        md += &format!(
+            "| {} more lines | | {} | {} | {} |\n",
+            rows.len() - shown,
+            fmt_n(rest),
+            pct(rest),
+            per(rest)
+        );
+    }
+    md
+}
+
+/// Line `line` of source file `file`, trimmed and shortened for a table
+/// cell (`?` when the file is not on this machine).
+fn source_line(file: &str, line: u32) -> String {
+    let text = std::fs::read_to_string(file)
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .nth(line as usize - 1)
+                .map(str::trim)
+                .map(String::from)
+        })
+        .unwrap_or_else(|| "?".into());
+    let mut t: String = text.chars().take(72).collect();
+    if text.chars().count() > 72 {
+        t.push('…');
+    }
+    t.replace('|', "\\|").replace('`', "'")
 }
 
 /// `n` with thousands separated by commas.
@@ -384,6 +501,7 @@ const RUNS: [(&str, Option<&str>, &[&str]); 3] = [
             "spin teapot backend f32 frame 0",
             "scene demo",
             "bench gouraud_z_wid_dither8_rgb565",
+            "bench gouraud_z_wid_dither8_plane_rgb565",
             "bench large_gouraud_rgb565",
             "bench large_gouraud_z_rgb565",
             "bench large_gouraud_z_wid_dither8_rgb565",
@@ -418,7 +536,9 @@ fn instruction_profile_agrees_with_systick() {
          mark): the test asserts they are the instructions its ticks count, to a tick a \
          reading. The marks' calls change how the code around them compiles, so these \
          counts differ a little (under 1%) from `reports/targets.md`'s, which come from \
-         builds without them.\n\n",
+         builds without them. Where a workload runs the fused mesh path, its per-pair \
+         routine (`near_triangle`) and its row loop (`plane_rows`) are broken down \
+         statement by statement, each instruction charged to the source line that reaches it.\n\n",
     );
     for (board, features, wanted) in RUNS {
         let elf = build_with(board, &scenes, features, true);
